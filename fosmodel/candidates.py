@@ -1,0 +1,268 @@
+"""Candidate functions of Fast Orthogonal Search (eq. 15 of the FOS paper).
+
+A candidate is a product of *factors*.  A factor is a lagged channel value
+``ch[n-k]`` (the modelled output is always the channel ``y``, lags 1..L; an
+exogenous input ``x`` has lags 0..K) or a user-given column evaluated at ``n``
+(a sinusoid, a trend, a step...).  The constant candidate has no factor.
+
+Names are readable and parse back to the same term::
+
+    1    y[n-1]    temp[n-0]    y[n-1]*y[n-3]    y[n-2]^2    y[n-1]*temp[n-0]    sin@0.5Hz
+
+Factors are ordered canonically: ``y`` first, other channels alphabetically,
+then by lag; a repeated factor is written as a power.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
+from itertools import combinations_with_replacement
+
+import numpy as np
+
+from .exceptions import InputError
+
+OUTPUT = "y"
+_CHANNEL_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_COLUMN_RE = re.compile(r"^[A-Za-z_][^\s*^\[\]]*$")
+_LAGGED_RE = re.compile(r"^(?P<ch>[A-Za-z_][A-Za-z0-9_]*)\[n-(?P<lag>\d+)\]$")
+_POWER_RE = re.compile(r"^(?P<base>.+?)\^(?P<p>\d+)$")
+
+Factor = tuple[str, "int | None"]
+"""``(channel, lag)``; ``lag`` is None for a user-given column."""
+
+
+def _factor_key(f: Factor) -> tuple:
+    ch, lag = f
+    return (ch != OUTPUT, lag is None, ch, -1 if lag is None else lag)
+
+
+def _factor_name(f: Factor) -> str:
+    ch, lag = f
+    return ch if lag is None else f"{ch}[n-{lag}]"
+
+
+@dataclass(frozen=True)
+class Term:
+    """One candidate function: a product of factors (empty product = constant).
+
+    Parameters
+    ----------
+    factors : tuple of (channel, lag)
+        Canonicalised on construction; ``lag=None`` marks a user column.
+    """
+
+    factors: tuple[Factor, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "factors", tuple(sorted(self.factors, key=_factor_key)))
+
+    @property
+    def degree(self) -> int:
+        """Number of factors (0 for the constant)."""
+        return len(self.factors)
+
+    @property
+    def is_constant(self) -> bool:
+        return not self.factors
+
+    @cached_property
+    def name(self) -> str:
+        if not self.factors:
+            return "1"
+        parts = []
+        i = 0
+        while i < len(self.factors):
+            j = i
+            while j < len(self.factors) and self.factors[j] == self.factors[i]:
+                j += 1
+            base = _factor_name(self.factors[i])
+            parts.append(base if j - i == 1 else f"{base}^{j - i}")
+            i = j
+        return "*".join(parts)
+
+    def __str__(self) -> str:
+        return self.name
+
+    @classmethod
+    def parse(cls, name: str) -> Term:
+        """Parse a term name written by :attr:`name`.
+
+        Raises
+        ------
+        InputError
+            If ``name`` is not a valid term name.
+        """
+        text = name.strip()
+        if text == "1":
+            return cls(())
+        if not text:
+            raise InputError("empty term name")
+        factors: list[Factor] = []
+        for token in text.split("*"):
+            power = 1
+            m = _POWER_RE.match(token)
+            if m:
+                token, power = m.group("base"), int(m.group("p"))
+                if power < 1:
+                    raise InputError(f"bad power in term {name!r}")
+            lagged = _LAGGED_RE.match(token)
+            if lagged:
+                factor: Factor = (lagged.group("ch"), int(lagged.group("lag")))
+            elif _COLUMN_RE.match(token) and "[" not in token:
+                factor = (token, None)
+            else:
+                raise InputError(f"cannot parse term {name!r} (bad factor {token!r})")
+            factors.extend([factor] * power)
+        return cls(tuple(factors))
+
+
+@dataclass(frozen=True)
+class CandidateSpec:
+    """What candidate functions to generate.
+
+    Parameters
+    ----------
+    max_lag : int
+        L: lagged outputs ``y[n-1] .. y[n-L]``.
+    degree : int
+        CP: highest degree of the cross-products of the lagged factors.
+    exog_lags : mapping of str to int
+        K per exogenous channel: ``x[n-0] .. x[n-K]``.
+    columns : sequence of str
+        Names of user-given candidate columns (arrays supplied with the data).
+        They enter linearly, not in cross-products.
+    constant : bool
+        Include the constant candidate ``1``.
+    """
+
+    max_lag: int = 10
+    degree: int = 1
+    exog_lags: Mapping[str, int] = field(default_factory=dict)
+    columns: Sequence[str] = ()
+    constant: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "exog_lags", dict(self.exog_lags or {}))
+        object.__setattr__(self, "columns", tuple(self.columns or ()))
+        _check_int("max_lag", self.max_lag, 0)
+        _check_int("degree", self.degree, 1)
+        for ch, k in self.exog_lags.items():
+            if not isinstance(ch, str) or not _CHANNEL_RE.match(ch) or ch == OUTPUT:
+                raise InputError(
+                    f"exogenous channel name {ch!r} must be an identifier other than {OUTPUT!r}"
+                )
+            _check_int(f"lag of exogenous channel {ch!r}", k, 0)
+        for name in self.columns:
+            if not isinstance(name, str) or not _COLUMN_RE.match(name) or "[" in name:
+                raise InputError(
+                    f"candidate column name {name!r} must start with a letter or '_' and may not "
+                    "contain spaces, '*', '^', '[' or ']'"
+                )
+            if name in self.exog_lags or name in (OUTPUT, "1"):
+                raise InputError(f"candidate column name {name!r} clashes with a channel")
+        if len(set(self.columns)) != len(self.columns):
+            raise InputError("candidate column names must be unique")
+
+    @property
+    def lag_window(self) -> int:
+        """N0: the first sample index at which every candidate is defined."""
+        return max([self.max_lag, *self.exog_lags.values()])
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        """Signals the candidates read: ``y``, then exogenous channels, then columns."""
+        return (OUTPUT, *self.exog_lags, *self.columns)
+
+    def base_factors(self) -> list[Factor]:
+        """The degree-1 lagged factors, in canonical order."""
+        out: list[Factor] = [(OUTPUT, lag) for lag in range(1, self.max_lag + 1)]
+        for ch in sorted(self.exog_lags):
+            out.extend((ch, lag) for lag in range(self.exog_lags[ch] + 1))
+        return out
+
+
+def _check_int(what: str, value: object, lowest: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lowest:
+        raise InputError(f"{what} must be an integer >= {lowest}, got {value!r}")
+
+
+def count_candidates(spec: CandidateSpec) -> int:
+    """Number of candidates :func:`generate_terms` would produce, without building them.
+
+    With B lagged factors and degree D there are ``sum_{d=1..D} C(B+d-1, d)``
+    products (multisets), plus the constant and the user columns.
+    """
+    b = len(spec.base_factors())
+    products = sum(math.comb(b + d - 1, d) for d in range(1, spec.degree + 1))
+    return int(spec.constant) + products + len(spec.columns)
+
+
+def generate_terms(spec: CandidateSpec) -> list[Term]:
+    """All candidate terms of ``spec``: constant, products by degree, then user columns."""
+    key = (spec.max_lag, spec.degree, tuple(sorted(spec.exog_lags.items())), spec.columns,
+           spec.constant)
+    return list(_generate(*key))
+
+
+@lru_cache(maxsize=32)
+def _generate(max_lag, degree, exog_lags, columns, constant) -> tuple[Term, ...]:
+    spec = CandidateSpec(max_lag, degree, dict(exog_lags), columns, constant)
+    base = spec.base_factors()
+    terms = [Term(())] if constant else []
+    for d in range(1, degree + 1):
+        terms.extend(Term(c) for c in combinations_with_replacement(base, d))
+    terms.extend(Term(((name, None),)) for name in columns)
+    return tuple(terms)
+
+
+def term_names(terms: Iterable[Term]) -> list[str]:
+    return [t.name for t in terms]
+
+
+def check_terms_fit_spec(terms: Iterable[Term], spec: CandidateSpec) -> None:
+    """Raise InputError if a term reads a channel or lag that ``spec`` does not provide."""
+    for term in terms:
+        for ch, lag in term.factors:
+            if lag is None:
+                ok = ch in spec.columns
+            elif ch == OUTPUT:
+                ok = 1 <= lag <= spec.max_lag
+            else:
+                ok = ch in spec.exog_lags and lag <= spec.exog_lags[ch]
+            if not ok:
+                raise InputError(f"term {term.name!r} is outside the candidate spec")
+
+
+def evaluate_terms(
+    terms: Sequence[Term], signals: Mapping[str, np.ndarray], start: int
+) -> np.ndarray:
+    """Evaluate terms point by point for ``n = start .. N-1``.
+
+    Parameters
+    ----------
+    terms : sequence of Term
+    signals : mapping of channel name to 1-D array
+        ``y`` and every channel or column the terms read, all of length N.
+    start : int
+        First sample index; must be at least every lag used.
+
+    Returns
+    -------
+    ndarray of shape (N - start, len(terms))
+    """
+    n = len(next(iter(signals.values())))
+    out = np.empty((n - start, len(terms)))
+    for j, term in enumerate(terms):
+        col = np.ones(n - start)
+        for ch, lag in term.factors:
+            lag = lag or 0
+            if lag > start:
+                raise InputError(f"term {term.name!r} needs {lag} past samples, only {start} given")
+            col *= signals[ch][start - lag : n - lag]
+        out[:, j] = col
+    return out

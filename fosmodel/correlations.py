@@ -1,0 +1,352 @@
+"""Korenberg's speed-up: FOS correlations of lagged candidates from correlation tables.
+
+Every quantity FOS needs is the mean, over the fitting window ``n = N0..N-1``,
+of a product of lagged signals ``u_c1(n - l1) u_c2(n - l2) ...`` (a *moment*).
+Shifting all lags by their minimum ``lmin`` gives the moment's *shape*; a
+shape's sum over the whole record is computed once, and each moment with that
+shape is then the shape's sum plus an end correction of at most ``lmin`` samples
+at each end of the window.  The second-order shapes are the auto- and
+cross-correlations of the signals; third-order shapes serve the cross-products
+of degree 2.  So an AR(L) search costs L+1 dot products of length N however
+many terms it selects, instead of a dot product per Gram entry.
+
+Moments of a degree above ``table_degree`` (e.g. a product of two
+cross-products) have few repeated shapes; they are summed directly over the
+window, sharing partial products through a prefix tree, so that the N x C
+candidate matrix is never formed.
+
+:class:`LagCorrelations` is the fast provider for :func:`fosmodel.fos._fos_kernel`;
+the point-by-point reference is :class:`fosmodel.fos._DataCorrelations` on the
+matrix from :func:`fosmodel.candidates.evaluate_terms`.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from .candidates import OUTPUT, Term
+
+_BLOCK = 20_000  # most entries tabulated at once for the linear candidates' Gram columns
+_SCRATCH = threading.local()
+
+
+def _scratch(depth: int, size: int) -> np.ndarray:
+    """A work array of ``size`` floats for one prefix depth, reused by this thread.
+
+    Fresh arrays of this size come from mmap and pay a page fault per 4 kB on
+    first touch, which costs more than the products written into them.
+    """
+    buffers = getattr(_SCRATCH, "buffers", None)
+    if buffers is None:
+        buffers = _SCRATCH.buffers = {}
+    buf = buffers.get(depth)
+    if buf is None or len(buf) != size:
+        buf = buffers[depth] = np.empty(size)
+    return buf
+
+
+class LagCorrelations:
+    """Correlations of lagged-product candidates over the window ``n = start..N-1``.
+
+    Parameters
+    ----------
+    terms : sequence of Term
+        The candidates (their lags must not exceed ``start``).
+    signals : mapping of str to 1-D array
+        ``y`` and every channel or column the terms read, all of length N.
+    start : int
+        N0, the first sample of the fitting window.
+    table_degree : int
+        Moments up to this degree come from shape tables; higher ones are
+        summed directly.  0 sums everything directly.
+    """
+
+    def __init__(
+        self,
+        terms: Sequence[Term],
+        signals: Mapping[str, np.ndarray],
+        start: int,
+        *,
+        table_degree: int = 3,
+    ) -> None:
+        names = [OUTPUT, *sorted({ch for t in terms for ch, _ in t.factors} - {OUTPUT})]
+        n = len(signals[OUTPUT])
+        n0 = start
+        self._n, self._n0 = n, n0
+        self.n_samples = n - n0
+        self._stride = n0 + 1
+        self._u = [np.ascontiguousarray(signals[ch], dtype=float) for ch in names]
+        width = max([t.degree for t in terms] + [1])
+        self._ch = np.full((len(terms), width), -1, dtype=np.int64)
+        self._lag = np.zeros((len(terms), width), dtype=np.int64)
+        index = {ch: i for i, ch in enumerate(names)}
+        for i, t in enumerate(terms):
+            for k, (ch, lag) in enumerate(t.factors):
+                self._ch[i, k], self._lag[i, k] = index[ch], lag or 0
+        self._table_degree = table_degree
+        self._radix = self._key_radix(len(names) * self._stride + 1, 2 * width, table_degree)
+        self._plans: dict[tuple, dict] = {}
+        self._squares: dict[int, np.ndarray] = {}
+        self._keys = np.empty(0, dtype=np.int64)  # tabulated shape keys, sorted
+        self._slots = np.empty(0, dtype=np.intp)  # their rows in the tables
+        self._core = np.empty(0)
+        self._head = np.empty((0, n0 + 1))
+        self._tail = np.empty((0, n0 + 1))
+        # the signals near each end of the window, E[ch, i, rel] = u_ch(lo + i - rel), with
+        # one more "channel" of ones for absent factors
+        ones = np.ones((1, n0, n0 + 1))
+        self._heads = np.concatenate([[self._edge_matrix(u, 0) for u in self._u], ones])
+        self._tails = np.concatenate([[self._edge_matrix(u, n - n0) for u in self._u], ones])
+
+        self._lmin = np.where(self._ch >= 0, self._lag, n0).min(axis=1)
+        self._pair = self._join(self._ch, self._lag, width)  # buffers for Gram columns
+        # everything the search needs before its first step, in one batch:
+        # mean(y), mean(y^2), mean(p_c), mean(y p_c), mean(p_c^2)
+        k = len(terms)
+        ch0 = np.full((2 + 3 * k, 2 * width), -1, dtype=np.int64)
+        lag0 = np.zeros_like(ch0)
+        ch0[0, 0] = ch0[1, :2] = 0  # y is channel 0 at lag 0
+        ch0[2 : 2 + k, :width], lag0[2 : 2 + k, :width] = self._ch, self._lag
+        ch0[2 + k : 2 + 2 * k, :width], lag0[2 + k : 2 + 2 * k, :width] = self._ch, self._lag
+        ch0[2 + k : 2 + 2 * k, width] = 0
+        ch0[2 + 2 * k :, :width], lag0[2 + 2 * k :, :width] = self._ch, self._lag
+        ch0[2 + 2 * k :, width:], lag0[2 + 2 * k :, width:] = self._ch, self._lag
+        first = self._moments(ch0, lag0)
+        self.y_mean, self.y_mean_sq = float(first[0]), float(first[1])
+        self.means, self.target, self.diag = np.split(first[2:], 3)
+        self._columns = self._linear_block(width)
+
+    def column(self, j: int) -> np.ndarray:
+        """mean(p_c p_j) for every candidate c."""
+        if j in self._columns:
+            return self._columns[j]
+        return self._moments(*self._pair, extra=(self._ch[j], self._lag[j]),
+                             lmin=np.minimum(self._lmin, self._lmin[j]))
+
+    def _linear_block(self, width: int) -> dict[int, np.ndarray]:
+        """Gram columns of all linear candidates, in one batch, when they are small and tabular.
+
+        A linear candidate's column holds moments of degree at most width + 1,
+        all table lookups when that is within ``table_degree``; for up to
+        ``_BLOCK`` entries one batch costs less than a call per search step.
+        """
+        linear = np.flatnonzero((self._ch >= 0).sum(axis=1) == 1)
+        k = len(self._ch)
+        if width + 1 > self._table_degree or not 0 < len(linear) * k <= _BLOCK:
+            return {}
+        ch = np.empty((len(linear) * k, width + 1), dtype=np.int64)
+        lag = np.empty_like(ch)
+        ch[:, :width] = np.tile(self._ch, (len(linear), 1))
+        lag[:, :width] = np.tile(self._lag, (len(linear), 1))
+        ch[:, width] = np.repeat(self._ch[linear, 0], k)
+        lag[:, width] = np.repeat(self._lag[linear, 0], k)
+        values = self._moments(ch, lag).reshape(len(linear), k)
+        return dict(zip(linear.tolist(), values))
+
+    # -- moments ---------------------------------------------------------------------------
+
+    @staticmethod
+    def _join(ch: np.ndarray, lag: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray]:
+        """Row buffers holding the factors of each row followed by ``width`` free slots."""
+        pad = np.full((len(ch), width), -1, dtype=np.int64)
+        return np.hstack([ch, pad]), np.hstack([lag, np.zeros_like(pad)])
+
+    @staticmethod
+    def _key_radix(base: int, width: int, table_degree: int) -> np.ndarray:
+        """Powers of ``base`` to encode shapes of up to ``width`` factors in an int64."""
+        while width > table_degree and base ** width >= 2**62:
+            width -= 1
+        return base ** np.arange(max(width, 1), dtype=np.int64)
+
+    def _moments(self, ch, lag, extra=None, lmin=None) -> np.ndarray:
+        """Window means of products given row-wise by (channel, lag); channel -1 = none.
+
+        ``extra`` is one factor row ``(channels, lags)`` common to every product
+        (the selected term of a Gram column): it fills the free slots of the
+        row buffers ``ch``, ``lag``.  A product comes from the shape tables if
+        its degree is at most ``table_degree``, or if its shape is already
+        tabulated or repeats within the batch; otherwise it is summed directly,
+        with the common factors as a shared weight.
+        """
+        if extra is not None:
+            w = len(extra[0])
+            ch[:, -w:], lag[:, -w:] = extra
+        present = ch >= 0
+        degree = present.sum(axis=1)
+        if lmin is None:
+            lmin = np.where(present, lag, self._n0).min(axis=1)
+        keys, codes = self._shape_keys(ch, lag, present, lmin)
+        slot = self._lookup(keys)
+        table = slot >= 0
+        if not table.all():
+            table |= degree <= self._table_degree
+            maybe = ~table & (degree <= len(self._radix))
+            if maybe.any():  # tabulate a high-degree shape only if it serves several products
+                uniq, counts = np.unique(keys[maybe], return_counts=True)
+                table |= np.isin(keys, uniq[counts > 1])
+            new = table & (slot < 0)
+            if new.any():
+                uniq, first = np.unique(keys[new], return_index=True)
+                self._add_shapes(codes[new][first], uniq)
+                slot = self._lookup(keys)
+        if table.all():
+            out = self._core[slot] + self._head[slot, self._n0 - lmin] - self._tail[slot, lmin]
+            return out / self.n_samples
+        out = np.empty(len(ch))
+        s, lo = slot[table], lmin[table]
+        out[table] = self._core[s] + self._head[s, self._n0 - lo] - self._tail[s, lo]
+        direct = ~table
+        if extra is None:
+            out[direct] = self._direct_sums(ch[direct], lag[direct], None)
+        else:
+            w = len(extra[0])
+            weight = self._direct_sums(extra[0][None], extra[1][None], None, products=True)[0]
+            out[direct] = self._direct_sums(ch[direct, :-w], lag[direct, :-w], weight)
+        return out / self.n_samples
+
+    def _lookup(self, keys: np.ndarray) -> np.ndarray:
+        """Table row of each shape key, -1 where not tabulated."""
+        if not len(self._keys):
+            return np.full(len(keys), -1, dtype=np.intp)
+        pos = np.minimum(np.searchsorted(self._keys, keys), len(self._keys) - 1)
+        return np.where(self._keys[pos] == keys, self._slots[pos], -1)
+
+    def _shape_keys(self, ch, lag, present, lmin):
+        """Integer key of each row's shape (negative where it has too many factors to encode)."""
+        code = ch * self._stride + (lag - lmin[:, None] + 1)
+        code[~present] = 0
+        code.sort(axis=1)
+        width = len(self._radix)
+        if code.shape[1] <= width:
+            return code @ self._radix[width - code.shape[1] :], code
+        fits = ~code[:, :-width].any(axis=1)
+        code = code[:, -width:]
+        return np.where(fits, code @ self._radix, -1 - np.arange(len(code))), code
+
+    def _factor(self, ch: int, rel: int, lo: int, hi: int) -> np.ndarray:
+        """u_ch(t - rel) for t = lo..hi-1, a view (needs lo >= rel)."""
+        return self._u[ch][lo - rel : hi - rel]
+
+    def _power(self, ch: int | None, rel: int, k: int, lo: int, hi: int) -> np.ndarray:
+        """u_ch(t - rel)^k (k = 1 or 2; squares are computed once) for t = lo..hi-1.
+
+        ``ch`` None gives ones (the empty product).
+        """
+        if ch is None:
+            return np.ones(hi - lo)
+        if k == 1:
+            return self._factor(ch, rel, lo, hi)
+        if ch not in self._squares:
+            self._squares[ch] = np.square(self._u[ch])
+        return self._squares[ch][lo - rel : hi - rel]
+
+    @staticmethod
+    def _split_last_run(factors: list) -> tuple[tuple, tuple]:
+        """Split sorted factors into a prefix and a last factor or, if it repeats, its square.
+
+        ``[(0, 0), (0, 3), (0, 3)]`` -> ``(((0, 0),), (0, 3, 2))``: y(t) times y(t-3)^2,
+        which saves forming one product over the window.
+        """
+        if not factors:
+            return (), (None, 0, 0)
+        k = 2 if len(factors) > 1 and factors[-2] == factors[-1] else 1
+        return tuple(factors[:-k]), (*factors[-1], k)
+
+    def _edge_matrix(self, u: np.ndarray, lo: int) -> np.ndarray:
+        """E[i, rel] = u(lo + i - rel) for i < N0, rel <= N0 (zero before the record starts)."""
+        n0 = self._n0
+        if n0 == 0:
+            return np.zeros((0, 1))
+        first = lo - n0
+        segment = np.concatenate([np.zeros(max(-first, 0)), u[max(first, 0) : lo + n0]])
+        return sliding_window_view(segment, n0 + 1)[:, ::-1]
+
+    def _walk(self, prefixes, lo: int, hi: int, root: np.ndarray | None = None):
+        """Yield ``(prefix, product)`` over ``t = lo..hi-1`` for each prefix, in sorted order.
+
+        Partial products start from ``root`` and are shared depth-first;
+        ``None`` stands for the empty product.  A yielded product is only
+        valid until the next one (buffers are reused); always ``lo = N0``.
+        """
+        stack: list[tuple[tuple, np.ndarray | None]] = [((), root)]
+        for prefix in sorted(set(prefixes)):
+            while stack[-1][0] != prefix[: len(stack[-1][0])]:
+                stack.pop()
+            while len(stack[-1][0]) < len(prefix):
+                depth = len(stack[-1][0])
+                f = self._factor(*prefix[depth], lo, hi)
+                if stack[-1][1] is None:
+                    prod = f
+                else:  # one buffer per depth: a product lives only while its prefix is on the stack
+                    prod = np.multiply(stack[-1][1], f, out=_scratch(depth, hi - lo))
+                stack.append((prefix[: depth + 1], prod))
+            yield prefix, stack[-1][1]
+
+    def _add_shapes(self, codes: np.ndarray, keys: np.ndarray) -> None:
+        """Tabulate new shapes: their sum over the window and the sums near each end."""
+        n, n0, stride = self._n, self._n0, self._stride
+        groups: dict[tuple, list] = {}
+        for i, row in enumerate(codes.tolist()):
+            prefix, last = self._split_last_run([divmod(c - 1, stride) for c in row if c])
+            groups.setdefault(prefix, []).append((i, last))
+        core = np.empty(len(codes))
+        for prefix, g in self._walk(groups, n0, n):  # prefix products over the window
+            for i, last in groups[prefix]:
+                f = self._power(*last, n0, n)
+                core[i] = f.sum() if g is None else g @ f
+        # near the ends: products of every shape at once, then cumulative sums
+        ch, rel = np.divmod(codes - 1, stride)
+        ch[codes == 0], rel[codes == 0] = len(self._u), 0  # absent factor: the ones channel
+        head = np.zeros((len(codes), n0 + 1))  # head[a] = sum_{t=a}^{N0-1}
+        head[:, :n0] = np.cumsum(self._heads[ch, :, rel].prod(axis=1)[:, ::-1], axis=1)[:, ::-1]
+        tail = np.zeros((len(codes), n0 + 1))  # tail[b] = sum_{t=N-b}^{N-1}
+        tail[:, 1:] = np.cumsum(self._tails[ch, :, rel].prod(axis=1)[:, ::-1], axis=1)
+        base = len(self._core)
+        self._core = np.concatenate([self._core, core])
+        self._head = np.concatenate([self._head, head])
+        self._tail = np.concatenate([self._tail, tail])
+        keys = np.concatenate([self._keys, keys])
+        slots = np.concatenate([self._slots, base + np.arange(len(codes))])
+        order = np.argsort(keys, kind="stable")
+        self._keys, self._slots = keys[order], slots[order]
+
+    def _direct_sums(self, ch, lag, weight, products=False):
+        """Sum each row's product times ``weight`` over the window, sharing partial products.
+
+        With ``products=True`` return the products themselves instead of their sums.
+        """
+        plan = self._direct_plan(ch, lag)
+        out: list = [None] * len(ch)
+        for prefix, g in self._walk(plan, self._n0, self._n, weight):
+            rows, factors = plan[prefix]
+            if products:
+                values = [f if g is None else g * f for f in factors]
+            else:
+                values = [f.sum() if g is None else g @ f for f in factors]
+            for i, v in zip(rows, values):
+                out[i] = v
+        return out if products else np.asarray(out, dtype=float)
+
+    def _direct_plan(self, ch, lag) -> dict[tuple, tuple[list[int], list[np.ndarray]]]:
+        """Rows grouped by their factors but the last, with the last factor's window slice.
+
+        The plan depends only on the rows, and a Gram column's directly summed
+        rows are the same every time, so plans are cached.
+        """
+        key = (ch.tobytes(), lag.tobytes(), ch.shape)
+        plan = self._plans.get(key)
+        if plan is None:
+            n, n0 = self._n, self._n0
+            plan = {}
+            for i, (r_ch, r_lag) in enumerate(zip(ch.tolist(), lag.tolist())):
+                row = sorted((c, lag) for c, lag in zip(r_ch, r_lag) if c >= 0)
+                prefix, last = self._split_last_run(row)
+                rows, factors = plan.setdefault(prefix, ([], []))
+                rows.append(i)
+                factors.append(self._power(*last, n0, n))
+            self._plans[key] = plan
+        return plan

@@ -1,0 +1,28 @@
+"""Exceptions and warnings raised by fosmodel.
+
+Every error that a user can cause (bad file, bad column, impossible fit) is an
+:class:`InputError`; the command line turns it into a one-line message and exit
+code 2.  Anything else reaching the command line is a bug (exit code 1).
+"""
+
+from __future__ import annotations
+
+
+class FOSModelError(Exception):
+    """Base class of all fosmodel errors."""
+
+
+class InputError(FOSModelError, ValueError):
+    """The input (data, column, option or file) cannot be used as given.
+
+    The message names the problem precisely: the file, the column and the
+    first offending sample where they apply.
+    """
+
+
+class UnstableModelWarning(UserWarning):
+    """A fitted linear model has a characteristic root on or outside the unit circle."""
+
+
+class FitWarning(UserWarning):
+    """The fit finished but something about it deserves the user's attention."""

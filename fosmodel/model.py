@@ -1,0 +1,503 @@
+"""FOSModel: a Fast Orthogonal Search difference-equation model of a time series.
+
+The model (FOS paper, eqs. 14-15) is
+
+    y[n] - mu_y = a_0 + sum_m a_m P_m[n] + e[n],
+
+where each ``P_m`` is a product of lagged, centred outputs ``y[n-l] - mu_y``
+(1 <= l <= L), lagged centred inputs ``x[n-k] - mu_x`` (0 <= k <= K) and
+user-given columns, chosen by :func:`fosmodel.fos._fos_kernel` among all such
+candidates up to the cross-product degree.  Centring on the training means
+(``center=True``) makes the selected terms independent of the sensor bias:
+adding an offset to the record leaves the model unchanged but for ``mu``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import warnings
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+from scipy.signal import lfilter, lfiltic
+from sklearn.base import BaseEstimator
+
+from . import __version__
+from .candidates import (
+    OUTPUT,
+    CandidateSpec,
+    Term,
+    check_terms_fit_spec,
+    count_candidates,
+    evaluate_terms,
+    generate_terms,
+)
+from .correlations import LagCorrelations
+from .exceptions import InputError, UnstableModelWarning
+from .fos import StopRule, _DataCorrelations, _fos_kernel, center
+from .summary import Summary
+from .validation import as_channels, as_signal
+
+log = logging.getLogger(__name__)
+
+FORMAT = "fosmodel.FOSModel"
+FORMAT_VERSION = 1
+_BYTES_PER_VALUE = 8
+
+
+class FOSModel(BaseEstimator):
+    """Fast Orthogonal Search model of a sensor error time series.
+
+    Parameters
+    ----------
+    max_lag : int
+        L, lagged outputs ``y[n-1] .. y[n-L]``.
+    degree : int
+        CP, the highest cross-product degree of the lagged factors.
+    exog_lags : dict of str to int, optional
+        K per exogenous channel: ``{"temp": 5}`` offers ``temp[n-0] .. temp[n-5]``.
+    columns : list of str, optional
+        Names of user-given candidate columns (passed in ``exog``), e.g. a
+        sinusoid or a trend; they enter linearly.
+    max_terms : int, optional
+        Most terms to select besides the constant.
+    stop : str
+        Stopping rule: ``"korenberg"`` (default), ``"max_terms"``, ``"variance"``,
+        ``"mean_square"``, ``"aic"``, ``"bic"``, ``"fpe"``, ``"mdl"``; see
+        :class:`fosmodel.fos.StopRule`.
+    tol : float, optional
+        Fraction for the ``"variance"`` and ``"mean_square"`` rules.
+    center : bool
+        Build the candidates from signals centred on their training means.
+    dependence_tol : float
+        Candidates whose orthogonal part falls to this fraction of their own
+        mean square are numerically dependent and skipped.
+    max_candidates : int
+        Refuse candidate sets larger than this (the count is computed first).
+    correlations : {"fast", "reference"}
+        Korenberg's correlation tables, or point by point on the candidate
+        matrix (slow, for checking).
+
+    Attributes
+    ----------
+    terms_ : list of str
+        Selected terms in selection order (the constant excluded).
+    coef_ : ndarray
+        Their weights ``a_m``.
+    intercept_ : float
+        ``a_0``, the constant of the centred expansion.
+    offsets_ : dict of str to float
+        Centring offsets ``mu`` of ``y`` and of each channel (zeros if ``center=False``).
+    mse_path_ : ndarray
+        Training residual MSE after each term of ``terms_``.
+    q_ : ndarray
+        MSE reduction ``Q`` of each term (eq. 27).
+    mse_null_ : float
+        Training MSE of the constant-only model (the variance of y).
+    n_candidates_, n_samples_, lag_window_, stop_reason_, n_dependent_, target_name_
+
+    Examples
+    --------
+    >>> from scipy.signal import lfilter
+    >>> rng = np.random.default_rng(1)
+    >>> y = lfilter([1.0], [1.0, -1.5, 0.7], rng.standard_normal(5000))
+    >>> model = FOSModel(max_lag=5).fit(y)
+    >>> model.terms_
+    ['y[n-1]', 'y[n-2]']
+    >>> np.round(model.coef_, 2).tolist()
+    [1.5, -0.7]
+    """
+
+    def __init__(
+        self,
+        max_lag: int = 10,
+        degree: int = 1,
+        exog_lags: dict[str, int] | None = None,
+        columns: list[str] | None = None,
+        max_terms: int | None = None,
+        stop: str = "korenberg",
+        tol: float | None = None,
+        center: bool = True,
+        dependence_tol: float = 1e-10,
+        max_candidates: int = 100_000,
+        correlations: str = "fast",
+    ) -> None:
+        self.max_lag = max_lag
+        self.degree = degree
+        self.exog_lags = exog_lags
+        self.columns = columns
+        self.max_terms = max_terms
+        self.stop = stop
+        self.tol = tol
+        self.center = center
+        self.dependence_tol = dependence_tol
+        self.max_candidates = max_candidates
+        self.correlations = correlations
+
+    # -- fitting -------------------------------------------------------------------------
+
+    def _spec(self) -> CandidateSpec:
+        return CandidateSpec(self.max_lag, self.degree, self.exog_lags or {}, self.columns or ())
+
+    def fit(self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None) -> FOSModel:
+        """Select terms and weights on the record ``y`` (and its exogenous channels).
+
+        Parameters
+        ----------
+        y : array-like of shape (N,)
+            The modelled signal (numpy array, list or pandas Series).
+        exog : dict or DataFrame, optional
+            Exogenous channels and user columns by name, each of length N.
+
+        Returns
+        -------
+        self
+        """
+        spec = self._spec()
+        rule = StopRule(self.stop, self.tol, self.max_terms)
+        if self.correlations not in ("fast", "reference"):
+            raise InputError(
+                f"correlations must be 'fast' or 'reference', not {self.correlations!r}")
+        y_arr = as_signal(y, "y")
+        n_cand = count_candidates(spec)
+        n0 = spec.lag_window
+        log.info("FOS candidate set: %d candidates (L=%d, CP=%d, exog=%s, columns=%d)",
+                 n_cand, spec.max_lag, spec.degree, dict(spec.exog_lags), len(spec.columns))
+        if n_cand > self.max_candidates:
+            mib = n_cand * max(len(y_arr) - n0, 0) * _BYTES_PER_VALUE / 2**20
+            raise InputError(
+                f"{n_cand} candidates exceed max_candidates={self.max_candidates} "
+                f"(as a matrix over this record they would take {mib:,.0f} MiB); "
+                "lower the lag, the degree or the channels, or raise max_candidates"
+            )
+        needed = (rule.max_terms or 1) + 2
+        if len(y_arr) - n0 < needed:
+            raise InputError(
+                f"record too short: {len(y_arr)} samples, but the lag window needs {n0} and "
+                f"fitting {rule.max_terms or 1} term(s) needs {needed} more"
+            )
+        channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
+        signals, offsets = self._centred({OUTPUT: y_arr, **channels}, None)
+        terms = [t for t in generate_terms(spec) if not t.is_constant]
+        if self.correlations == "fast":
+            corr = LagCorrelations(terms, signals, n0)
+        else:
+            corr = _DataCorrelations(evaluate_terms(terms, signals, n0), signals[OUTPUT][n0:])
+        res = _fos_kernel(corr, rule, intercept=True, dependence_tol=self.dependence_tol)
+
+        self.spec_ = spec
+        self._terms = [terms[i] for i in res.support]
+        self.terms_ = [t.name for t in self._terms]
+        self.coef_ = res.coef
+        self.intercept_ = res.intercept
+        self.offsets_ = offsets
+        self.mse_path_ = res.mse_path
+        self.q_ = res.q
+        self.mse_null_ = res.mse_null
+        self.n_candidates_ = n_cand
+        self.n_samples_ = res.n_samples
+        self.lag_window_ = n0
+        self.stop_reason_ = res.stop_reason
+        self.n_dependent_ = res.n_dependent
+        self.target_name_ = getattr(y, "name", None) or OUTPUT
+        return self
+
+    def _centred(
+        self, signals: dict[str, np.ndarray], offsets: Mapping[str, float] | None
+    ) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+        """Subtract the training offsets (or, when fitting, compute them)."""
+        if not self.center:
+            return signals, {k: 0.0 for k in signals}
+        if offsets is None:
+            pairs = {k: center(v) for k, v in signals.items()}
+            return ({k: c for k, (c, _) in pairs.items()},
+                    {k: float(m) for k, (_, m) in pairs.items()})
+        return {k: v - offsets[k] for k, v in signals.items()}, dict(offsets)
+
+    # -- using the model -----------------------------------------------------------------
+
+    def _check_fitted(self) -> None:
+        if not hasattr(self, "terms_"):
+            raise InputError("this FOSModel is not fitted yet; call fit() first")
+
+    def _signals(self, y: object, exog: object, length: int | None = None) -> dict[str, np.ndarray]:
+        y_arr = as_signal(y, "y")
+        n = len(y_arr) if length is None else length
+        spec = self.spec_
+        channels = as_channels(exog, [*spec.exog_lags, *spec.columns], n)
+        signals, _ = self._centred({OUTPUT: y_arr, **channels}, self._offsets_for(channels))
+        return signals
+
+    def _offsets_for(self, channels: Mapping[str, object]) -> dict[str, float]:
+        return {OUTPUT: self.offsets_[OUTPUT], **{k: self.offsets_[k] for k in channels}}
+
+    def predict(self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None):
+        """One-step-ahead prediction from the true past, aligned with ``y``.
+
+        Sample ``n`` is predicted from ``y[n-1], y[n-2], ...`` and the channels
+        up to ``n``; the first ``lag_window_`` samples have no prediction (NaN).
+
+        Returns
+        -------
+        ndarray, or Series with the index of ``y`` if ``y`` is a Series
+        """
+        self._check_fitted()
+        signals = self._signals(y, exog)
+        n = len(signals[OUTPUT])
+        n0 = self.lag_window_
+        out = np.full(n, np.nan)
+        if n > n0:
+            values = evaluate_terms(self._terms, signals, n0) @ self.coef_
+            out[n0:] = values + self.intercept_ + self.offsets_[OUTPUT]
+        if isinstance(y, pd.Series):
+            return pd.Series(out, index=y.index, name="prediction")
+        return out
+
+    def residuals(self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None):
+        """``y`` minus its one-step prediction (NaN over the lag window)."""
+        pred = self.predict(y, exog)
+        return (y - pred) if isinstance(pred, pd.Series) else as_signal(y, "y") - pred
+
+    def ar_coefficients(self) -> np.ndarray:
+        """Weights of the pure output lags ``y[n-l]``, l = 1..L (zeros where not selected)."""
+        self._check_fitted()
+        a = np.zeros(self.spec_.max_lag)
+        for term, c in zip(self._terms, self.coef_):
+            if term.degree == 1 and term.factors[0][0] == OUTPUT:
+                a[term.factors[0][1] - 1] = c
+        return a
+
+    def ar_roots(self) -> np.ndarray:
+        """Roots of ``z^L - a_1 z^(L-1) - ... - a_L`` for the linear output dynamics."""
+        a = np.trim_zeros(self.ar_coefficients(), "b")
+        return np.roots(np.r_[1.0, -a]) if len(a) else np.empty(0)
+
+    def is_stable(self) -> bool:
+        """Whether every root of the linear output dynamics lies inside the unit circle."""
+        roots = self.ar_roots()
+        return bool(np.all(np.abs(roots) < 1.0))
+
+    def simulate(
+        self,
+        y_init: object,
+        n_steps: int,
+        exog: Mapping[str, object] | pd.DataFrame | None = None,
+        noise: object | None = None,
+    ) -> np.ndarray:
+        """Free run: continue ``y_init`` for ``n_steps`` samples from the model's own output.
+
+        Parameters
+        ----------
+        y_init : array-like
+            True past, at least ``lag_window_`` samples; the run starts after its end.
+        n_steps : int
+            Samples to simulate.
+        exog : dict or DataFrame, optional
+            Channels and columns for ``len(y_init) + n_steps`` samples, aligned
+            with ``y_init`` followed by the simulated part.
+        noise : array-like, optional
+            Driving noise added at each simulated step (zero by default: the
+            deterministic free-run prediction).
+
+        Returns
+        -------
+        ndarray of shape (n_steps,)
+
+        Warns
+        -----
+        UnstableModelWarning
+            If the linear output dynamics are unstable, or the run diverges
+            (the samples from the divergence on are NaN).
+        """
+        self._check_fitted()
+        y0 = as_signal(y_init, "y_init")
+        n0 = self.lag_window_
+        if len(y0) < n0:
+            raise InputError(f"y_init has {len(y0)} samples; the model needs at least {n0}")
+        if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 0:
+            raise InputError(f"n_steps must be a non-negative integer, got {n_steps!r}")
+        start, total = len(y0), len(y0) + int(n_steps)
+        drive = np.zeros(n_steps) if noise is None else as_signal(noise, "noise")
+        if len(drive) != n_steps:
+            raise InputError(f"noise has {len(drive)} samples, n_steps is {n_steps}")
+        if not self.is_stable():
+            rho = float(np.max(np.abs(self.ar_roots())))
+            warnings.warn(UnstableModelWarning(
+                f"the fitted output dynamics are unstable (largest root modulus {rho:.4f}); "
+                "the free run grows without bound"), stacklevel=2)
+        signals = self._signals(np.r_[y0, np.zeros(n_steps)], exog, total)
+        ar, nonlinear, drive = self._split_terms(signals, start, drive)
+        with np.errstate(over="ignore", invalid="ignore"):
+            if nonlinear:
+                out = self._run_nonlinear(signals[OUTPUT], start, ar, nonlinear, drive)
+            else:
+                out = self._run_linear(signals[OUTPUT][:start], ar, drive)
+        bad = np.flatnonzero(~np.isfinite(out))
+        if bad.size:
+            warnings.warn(UnstableModelWarning(
+                f"the free run diverged at step {bad[0]}; later samples are NaN"), stacklevel=2)
+            out[bad[0]:] = np.nan
+        return out + self.offsets_[OUTPUT]
+
+    def _split_terms(self, signals, start, drive):
+        """Split the terms into AR weights, a drive (terms free of y) and nonlinear terms.
+
+        A nonlinear term becomes ``(w, lags)``: its weight times its factors
+        other than y, over the simulated samples, and the lags of its y factors.
+        """
+        ar = np.zeros(self.spec_.max_lag)
+        nonlinear = []
+        drive = drive + self.intercept_
+        for term, c in zip(self._terms, self.coef_):
+            y_lags = [lag for ch, lag in term.factors if ch == OUTPUT]
+            rest = Term(tuple(f for f in term.factors if f[0] != OUTPUT))
+            if not y_lags:
+                drive = drive + c * evaluate_terms([rest], signals, start)[:, 0]
+            elif term.degree == 1:
+                ar[y_lags[0] - 1] = c
+            else:
+                nonlinear.append((c * evaluate_terms([rest], signals, start)[:, 0],
+                                  np.asarray(y_lags)))
+        return ar, nonlinear, drive
+
+    @staticmethod
+    def _run_linear(y_past: np.ndarray, ar: np.ndarray, drive: np.ndarray) -> np.ndarray:
+        if len(drive) == 0:
+            return drive.copy()
+        a = np.r_[1.0, -ar]
+        zi = lfiltic([1.0], a, y_past[::-1][: len(ar)])
+        return lfilter([1.0], a, drive, zi=zi)[0]
+
+    @staticmethod
+    def _run_nonlinear(y, start, ar, nonlinear, drive):
+        y = y.copy()
+        lags = np.flatnonzero(ar) + 1
+        a = ar[lags - 1]
+        for step in range(len(drive)):
+            n = start + step
+            value = drive[step] + a @ y[n - lags]
+            for w, y_lags in nonlinear:
+                value += w[step] * np.prod(y[n - y_lags])
+            if not math.isfinite(value):
+                y[n:] = np.nan
+                break
+            y[n] = value
+        return y[start:]
+
+    # -- reporting and persistence -------------------------------------------------------
+
+    def summary(self) -> Summary:
+        """Term, weight, MSE reduction Q and share of the variance explained."""
+        self._check_fitted()
+        null = self.mse_null_
+        share = 100.0 * self.q_ / null if null > 0 else np.zeros_like(self.q_)
+        table = pd.DataFrame({
+            "term": ["1", *self.terms_],
+            "coef": [self.intercept_, *self.coef_],
+            "Q (MSE reduction)": [np.nan, *self.q_],
+            "% var": [np.nan, *share],
+            "cum % var": [np.nan, *np.cumsum(share)],
+        })
+        final = float(self.mse_path_[-1]) if len(self.mse_path_) else null
+        spec = self.spec_
+        info = [
+            ("Output", str(self.target_name_)),
+            ("Samples in window", f"{self.n_samples_}"),
+            ("Lag window N0", f"{self.lag_window_}"),
+            ("Candidates", f"{self.n_candidates_}"),
+            ("Max lag L / CP", f"{spec.max_lag} / {spec.degree}"),
+            ("Exogenous", ", ".join(f"{k}:0-{v}" for k, v in spec.exog_lags.items()) or "none"),
+            ("Terms selected", f"{len(self.terms_)}"),
+            ("Stop rule",
+             self.stop if self.max_terms is None else f"{self.stop}, max {self.max_terms}"),
+            ("Stop reason", self.stop_reason_),
+            ("Dependent skipped", f"{self.n_dependent_}"),
+            ("Null MSE (variance)", f"{null:.6g}"),
+            ("Final MSE", f"{final:.6g}"),
+            ("Variance explained", f"{100 * (1 - final / null) if null > 0 else 0:.2f} %"),
+            ("Output offset mu_y", f"{self.offsets_[OUTPUT]:.6g}"),
+        ]
+        notes = [
+            "Terms are products of centred signals: y[n-l] stands for y[n-l] - mu_y."
+            if self.center else "Terms are products of the raw signals.",
+            "Q is the training MSE reduction of each term (FOS eq. 27), in selection order.",
+        ]
+        return Summary("Fast Orthogonal Search model", info, table, notes)
+
+    def to_dict(self, meta: Mapping[str, object] | None = None) -> dict:
+        """JSON-serialisable form; :meth:`from_dict` restores a model that predicts identically."""
+        self._check_fitted()
+        return {
+            "format": FORMAT,
+            "format_version": FORMAT_VERSION,
+            "fosmodel_version": __version__,
+            "params": self.get_params(),
+            "fitted": {
+                "terms": list(self.terms_),
+                "coef": [float(c) for c in self.coef_],
+                "intercept": float(self.intercept_),
+                "offsets": {k: float(v) for k, v in self.offsets_.items()},
+                "mse_path": [float(v) for v in self.mse_path_],
+                "q": [float(v) for v in self.q_],
+                "mse_null": float(self.mse_null_),
+                "n_candidates": int(self.n_candidates_),
+                "n_samples": int(self.n_samples_),
+                "stop_reason": self.stop_reason_,
+                "n_dependent": int(self.n_dependent_),
+                "target_name": str(self.target_name_),
+            },
+            "meta": dict(meta or {}),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, object]) -> FOSModel:
+        """Rebuild a fitted model from :meth:`to_dict` output.
+
+        Raises
+        ------
+        InputError
+            Not a fosmodel model, written by a newer format version, or corrupted.
+        """
+        if not isinstance(data, Mapping) or data.get("format") != FORMAT:
+            raise InputError("not a fosmodel FOSModel file (missing or wrong 'format')")
+        version = data.get("format_version")
+        if not isinstance(version, int) or version > FORMAT_VERSION:
+            raise InputError(
+                f"model file format version {version!r} is newer than this fosmodel "
+                f"({__version__}) reads (version {FORMAT_VERSION}); upgrade fosmodel"
+            )
+        try:
+            model = cls(**data["params"])
+            fitted = data["fitted"]
+            spec = model._spec()
+            terms = [Term.parse(name) for name in fitted["terms"]]
+            check_terms_fit_spec(terms, spec)
+            coef = np.asarray(fitted["coef"], dtype=float)
+            if coef.shape != (len(terms),):
+                raise InputError("coefficient count does not match the term count")
+            model.spec_ = spec
+            model._terms = terms
+            model.terms_ = [t.name for t in terms]
+            model.coef_ = coef
+            model.intercept_ = float(fitted["intercept"])
+            model.offsets_ = {str(k): float(v) for k, v in fitted["offsets"].items()}
+            model.mse_path_ = np.asarray(fitted["mse_path"], dtype=float)
+            model.q_ = np.asarray(fitted["q"], dtype=float)
+            model.mse_null_ = float(fitted["mse_null"])
+            model.n_candidates_ = int(fitted["n_candidates"])
+            model.n_samples_ = int(fitted["n_samples"])
+            model.lag_window_ = spec.lag_window
+            model.stop_reason_ = str(fitted["stop_reason"])
+            model.n_dependent_ = int(fitted["n_dependent"])
+            model.target_name_ = str(fitted["target_name"])
+            missing = {OUTPUT, *spec.exog_lags, *spec.columns} - set(model.offsets_)
+            if missing:
+                raise InputError(f"offsets missing for {', '.join(sorted(missing))}")
+        except InputError as exc:
+            raise InputError(f"corrupted model file: {exc}") from None
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InputError(f"corrupted model file: {type(exc).__name__}: {exc}") from None
+        model.meta_ = dict(data.get("meta") or {})
+        return model

@@ -1,0 +1,63 @@
+"""Plain-text result summaries in the manner of statsmodels' ``summary()``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+_WIDTH = 78
+
+
+@dataclass
+class Summary:
+    """A titled block of key/value facts, a table, and notes.
+
+    ``str(summary)`` renders it as fixed-width text; :meth:`to_frame` gives the
+    table and :meth:`as_markdown` a Markdown rendering for reports.
+    """
+
+    title: str
+    info: list[tuple[str, str]]
+    table: pd.DataFrame
+    notes: list[str] = field(default_factory=list)
+
+    def __str__(self) -> str:
+        rule = "=" * _WIDTH
+        lines = [self.title.center(_WIDTH), rule]
+        half = (len(self.info) + 1) // 2
+        left, right = self.info[:half], self.info[half:]
+        for i, (k, v) in enumerate(left):
+            text = f"{k + ':':<22}{v:>16}"
+            if i < len(right):
+                k2, v2 = right[i]
+                text += f"   {k2 + ':':<20}{v2:>17}"
+            lines.append(text)
+        lines.append(rule)
+        lines.extend(self.table.to_string(index=False, float_format=_fmt, na_rep="").splitlines())
+        lines.append(rule)
+        lines.extend(f"[{i + 1}] {note}" for i, note in enumerate(self.notes))
+        return "\n".join(lines)
+
+    def to_frame(self) -> pd.DataFrame:
+        return self.table.copy()
+
+    def as_markdown(self) -> str:
+        head = "\n".join(f"- **{k}**: {v}" for k, v in self.info)
+        cols = list(self.table.columns)
+        rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+        for rec in self.table.itertuples(index=False):
+            rows.append("| " + " | ".join(_cell(v) for v in rec) + " |")
+        notes = "\n".join(f"{i + 1}. {n}" for i, n in enumerate(self.notes))
+        body = f"### {self.title}\n\n{head}\n\n" + "\n".join(rows)
+        return body + (f"\n\n{notes}" if notes else "")
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.6g}"
+
+
+def _cell(v: object) -> str:
+    if isinstance(v, float):
+        return "" if v != v else _fmt(v)
+    return str(v)

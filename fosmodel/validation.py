@@ -1,0 +1,64 @@
+"""Checks on in-memory signals, with messages that name the signal and the sample."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable, Mapping
+
+import numpy as np
+
+from .exceptions import InputError
+
+
+def did_you_mean(name: str, options: Iterable[str]) -> str:
+    """``" (did you mean 'x'?)"`` for the closest option, or an empty string."""
+    close = difflib.get_close_matches(name, list(options), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def as_signal(values: object, name: str) -> np.ndarray:
+    """A finite 1-D float64 array from a numpy array, list or pandas Series.
+
+    Raises
+    ------
+    InputError
+        Not 1-D, not numeric, or holding NaN/inf (the first such sample is named).
+    """
+    try:
+        arr = np.asarray(values, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} is not numeric: {exc}") from None
+    if arr.ndim != 1:
+        raise InputError(f"{name} must be one-dimensional, got shape {arr.shape}")
+    if np.isfinite(arr).all():
+        return arr
+    bad = np.flatnonzero(~np.isfinite(arr))
+    if bad.size:
+        raise InputError(
+            f"{name} has {bad.size} non-finite value(s) (NaN or inf), first at sample {bad[0]}"
+        )
+    return arr
+
+
+def as_channels(
+    exog: Mapping[str, object] | None, needed: Iterable[str], length: int
+) -> dict[str, np.ndarray]:
+    """The channels ``needed`` from a dict or DataFrame, each checked like :func:`as_signal`."""
+    needed = list(needed)
+    if not needed:
+        return {}
+    if exog is None:
+        raise InputError(f"the model needs exogenous channel(s) {', '.join(needed)}; none given")
+    available = [str(k) for k in exog.keys()]
+    out = {}
+    for ch in needed:
+        if ch not in exog:
+            raise InputError(
+                f"exogenous channel {ch!r} not given{did_you_mean(ch, available)}; "
+                f"available: {', '.join(available) or 'none'}"
+            )
+        arr = as_signal(exog[ch], f"channel {ch!r}")
+        if len(arr) != length:
+            raise InputError(f"channel {ch!r} has {len(arr)} samples, the output has {length}")
+        out[ch] = arr
+    return out
