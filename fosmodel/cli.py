@@ -1,0 +1,191 @@
+"""Command line: ``fosmodel fit | predict | synth | demo``.
+
+Exit codes: 0 success, 2 bad input or usage (one-line message on stderr),
+1 internal error (with a hint to report it; ``--verbose`` shows the traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import traceback
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import __version__
+from .candidates import count_candidates
+from .exceptions import InputError
+from .fos import STOP_RULES
+from .loader import load_record
+from .model import FOSModel
+from .output import atomic_write, write_text
+
+log = logging.getLogger("fosmodel")
+
+
+def _exog_arg(text: str) -> tuple[str, int]:
+    name, sep, lag = text.partition(":")
+    if not sep or not name or not lag.isdigit():
+        raise argparse.ArgumentTypeError(f"expected NAME:K (e.g. temp:5), got {text!r}")
+    return name, int(lag)
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not np.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _out_path(path: str) -> Path:
+    out = Path(path)
+    if not out.parent.is_dir():
+        raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
+    return out
+
+
+def _cmd_fit(args: argparse.Namespace) -> int:
+    out = _out_path(args.out)
+    rec = load_record(args.file, rate=args.rate)
+    y = rec.column(args.column)
+    exog_lags = dict(args.exog or [])
+    model = FOSModel(max_lag=args.max_lag, degree=args.degree, exog_lags=exog_lags,
+                     max_terms=args.max_terms, stop=args.stop, tol=args.tol)
+    spec = model._spec()
+    print(f"candidates: {count_candidates(spec)} (L={spec.max_lag}, CP={spec.degree}"
+          + "".join(f", {k}:0-{v}" for k, v in exog_lags.items()) + ")")
+    exog = {name: rec.column(name) for name in exog_lags}
+    model.fit(pd.Series(y, name=args.column), exog)
+    print(model.summary())
+    meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
+            "n_samples": rec.n_samples}
+    write_text(out, json.dumps(model.to_dict(meta), indent=2) + "\n")
+    print(f"model written to {out}")
+    return 0
+
+
+def _read_model(path: str) -> FOSModel:
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"cannot read model {path}: {exc.strerror or exc}") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}: not a model file (invalid JSON at line {exc.lineno})") from None
+    try:
+        return FOSModel.from_dict(data)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+def _cmd_predict(args: argparse.Namespace) -> int:
+    out = _out_path(args.out)
+    model = _read_model(args.model)
+    rec = load_record(args.file, rate=args.rate)
+    column = args.column or model.meta_.get("column")
+    if not column:
+        raise InputError("the model does not say which column it models; pass --column")
+    y = rec.column(column)
+    channels = {name: rec.column(name) for name in [*model.spec_.exog_lags, *model.spec_.columns]}
+    pred = model.predict(y, channels)
+    frame = pd.DataFrame({column: y, "prediction": pred, "residual": y - pred})
+    if rec.time is not None:
+        frame.insert(0, "time", rec.time)
+    with atomic_write(out) as fh:
+        frame.to_csv(fh, index=False, float_format="%.10g")
+    resid = frame["residual"].to_numpy()[model.lag_window_:]
+    mse = float(np.mean(resid**2)) if resid.size else float("nan")
+    print(f"one-step prediction of {column!r} on {rec.source}: {resid.size} samples, MSE {mse:.6g}")
+    print(f"predictions written to {out}")
+    return 0
+
+
+def _cmd_synth(args: argparse.Namespace) -> int:
+    from data_synth.cli import run
+
+    return run(args)
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from .demo import run_demo
+
+    run_demo(Path(args.out))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="fosmodel",
+        description="Fast Orthogonal Search error models for MEMS inertial sensors.",
+    )
+    parser.add_argument("--version", action="version", version=f"fosmodel {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log details and tracebacks")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    fit = sub.add_parser("fit", help="fit a FOS model to one column of a record")
+    fit.add_argument("file", help="CSV, .npy or .parquet record")
+    fit.add_argument("--column", required=True, help="column to model")
+    fit.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
+    fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L (default 10)")
+    fit.add_argument("--degree", type=int, default=1, help="CP, cross-product degree (default 1)")
+    fit.add_argument("--exog", type=_exog_arg, action="append", metavar="NAME:K",
+                     help="exogenous column NAME with lags 0..K (repeatable)")
+    fit.add_argument("--max-terms", type=int, help="most terms besides the constant")
+    fit.add_argument("--stop", choices=STOP_RULES, default="korenberg", help="stopping rule")
+    fit.add_argument("--tol", type=float, help="fraction for --stop variance / mean_square")
+    fit.add_argument("--out", required=True, help="model file to write (JSON)")
+    fit.set_defaults(func=_cmd_fit)
+
+    pred = sub.add_parser("predict", help="one-step-ahead prediction with a saved model")
+    pred.add_argument("file", help="CSV, .npy or .parquet record")
+    pred.add_argument("--model", required=True, help="model file written by 'fosmodel fit'")
+    pred.add_argument("--column", help="column to predict (default: the one the model was fit on)")
+    pred.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
+    pred.add_argument("--out", required=True, help="CSV to write")
+    pred.set_defaults(func=_cmd_predict)
+
+    from data_synth.cli import configure_parser
+
+    synth = sub.add_parser("synth", help="write a synthetic record with its ground truth")
+    configure_parser(synth).set_defaults(func=_cmd_synth)
+
+    demo = sub.add_parser("demo", help="the main job on embedded synthetic data")
+    demo.add_argument("--out", default="fosmodel-out",
+                      help="output directory (default ./fosmodel-out)")
+    demo.set_defaults(func=_cmd_demo)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="fosmodel: %(message)s", stream=sys.stderr)
+    try:
+        return args.func(args)
+    except InputError as exc:
+        print(f"fosmodel: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("fosmodel: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug: say so, briefly, and how to get details
+        if args.verbose:
+            traceback.print_exc()
+        print(f"fosmodel: internal error: {type(exc).__name__}: {' '.join(str(exc).split())} "
+              "(this is a bug; please report it with the command you ran; "
+              "--verbose shows the traceback)", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,126 @@
+import json
+import shutil
+import subprocess
+import sysconfig
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.signal import lfilter
+
+from fosmodel import cli
+
+
+@pytest.fixture
+def record(tmp_path):
+    rng = np.random.default_rng(0)
+    n = 3000
+    temp = 20 + np.linspace(0, 5, n)
+    gyro = lfilter([1.0], [1.0, -1.2, 0.5], rng.standard_normal(n)) + 0.4 * temp
+    path = tmp_path / "rec.csv"
+    pd.DataFrame({"time": np.arange(n) / 100.0, "gyro_y": gyro, "temp_c": temp}).to_csv(
+        path, index=False)
+    return path
+
+
+def _run(args, capsys):
+    code = cli.main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_fit_then_predict(record, tmp_path, capsys):
+    model = tmp_path / "model.json"
+    code, out, err = _run(["fit", record, "--column", "gyro_y", "--max-lag", 4, "--degree", 2,
+                           "--exog", "temp_c:1", "--out", model], capsys)
+    assert code == 0, err
+    assert "candidates: 28 (L=4, CP=2, temp_c:0-1)" in out
+    assert "Fast Orthogonal Search model" in out and f"model written to {model}" in out
+    saved = json.loads(model.read_text())
+    assert saved["meta"]["column"] == "gyro_y" and saved["meta"]["rate_hz"] == pytest.approx(100)
+    pred = tmp_path / "pred.csv"
+    code, out, err = _run(["predict", record, "--model", model, "--out", pred], capsys)
+    assert code == 0, err
+    frame = pd.read_csv(pred)
+    assert list(frame.columns) == ["time", "gyro_y", "prediction", "residual"]
+    assert frame["prediction"].isna().sum() == 4
+    mse = float(np.mean(frame["residual"].dropna() ** 2))
+    assert f"MSE {mse:.6g}" in out
+    assert mse == pytest.approx(saved["fitted"]["mse_path"][-1], rel=1e-6)
+
+
+@pytest.mark.parametrize("stop", ["aic", "bic", "fpe", "mdl", "korenberg"])
+def test_fit_stop_rules(record, tmp_path, capsys, stop):
+    code, out, _ = _run(["fit", record, "--column", "gyro_y", "--stop", stop,
+                         "--out", tmp_path / "m.json"], capsys)
+    assert code == 0 and "Stop rule:" in out
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["fit", "{dir}/missing.csv", "--column", "gyro_y"], "no such file"),
+        (["fit", "{rec}", "--column", "gyro"], "no column 'gyro' (did you mean 'gyro_y'?)"),
+        (["fit", "{rec}", "--column", "gyro_y", "--exog", "temp:1"], "no column 'temp'"),
+        (["fit", "{rec}", "--column", "gyro_y", "--max-lag", "-2"], "max_lag must be an integer"),
+        (["fit", "{rec}", "--column", "gyro_y", "--stop", "variance"], "needs a tolerance"),
+        (["fit", "{rec}", "--column", "gyro_y", "--max-lag", "5000"], "record too short"),
+        (["fit", "{rec}", "--column", "gyro_y", "--rate", "50"], "disagrees with the time column"),
+        (["predict", "{rec}", "--model", "{rec}"], "not a model file"),
+        (["predict", "{rec}", "--model", "{dir}/none.json"], "cannot read model"),
+    ],
+)
+def test_bad_input_exit_2_one_line_and_no_output(record, tmp_path, capsys, args, message):
+    out_file = tmp_path / "out.json"
+    args = [a.format(rec=record, dir=tmp_path) for a in args] + ["--out", out_file]
+    code, out, err = _run(args, capsys)
+    assert code == 2
+    assert err.count("\n") == 1 and err.startswith("fosmodel: error: ") and message in err
+    assert not out_file.exists()
+
+
+def test_output_directory_must_exist(record, tmp_path, capsys):
+    code, _, err = _run(["fit", record, "--column", "gyro_y", "--out",
+                         tmp_path / "no" / "m.json"], capsys)
+    assert code == 2 and "does not exist" in err
+
+
+def test_usage_errors_exit_2(capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["fit", "x.csv", "--column", "a", "--exog", "temp", "--out", "m.json"])
+    assert exc.value.code == 2
+    assert "expected NAME:K" in capsys.readouterr().err
+
+
+def test_internal_error_exit_1_with_hint(record, tmp_path, capsys, monkeypatch):
+    def boom(*args, **kwargs):
+        raise RuntimeError("unexpected")
+
+    monkeypatch.setattr(cli, "load_record", boom)
+    code, _, err = _run(["fit", record, "--column", "gyro_y", "--out", tmp_path / "m.json"], capsys)
+    assert code == 1 and "internal error: RuntimeError: unexpected" in err and "report" in err
+
+
+def test_existing_output_survives_a_failed_run(record, tmp_path, capsys):
+    model = tmp_path / "model.json"
+    model.write_text("previous")
+    code, _, _ = _run(["fit", record, "--column", "nope", "--out", model], capsys)
+    assert code == 2 and model.read_text() == "previous"
+
+
+def test_demo_writes_outputs_and_says_where(tmp_path, capsys):
+    code, out, err = _run(["demo", "--out", tmp_path / "demo"], capsys)
+    assert code == 0, err
+    assert f"outputs written to {(tmp_path / 'demo').resolve()}" in out
+    table = pd.read_csv(tmp_path / "demo" / "comparison.csv")
+    assert set(table["method"]) == {"FOS (L=10, CP=1)", "Burg AR(10)"}
+    assert np.all(table["one_step_mse"] > 0)
+    assert (tmp_path / "demo" / "gyroscope_fos_model.json").exists()
+
+
+def test_console_script_is_installed(record, tmp_path):
+    script = shutil.which("fosmodel") or str(Path(sysconfig.get_path("scripts")) / "fosmodel")
+    proc = subprocess.run([script, "fit", str(record), "--column", "nope",
+                           "--out", str(tmp_path / "m.json")], capture_output=True, text=True)
+    assert proc.returncode == 2 and "no column 'nope'" in proc.stderr
