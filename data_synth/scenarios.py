@@ -1,0 +1,441 @@
+"""Named scenario presets.
+
+Parameter provenance (seeds in /work/shared/seeds):
+
+* Crossbow CC-300-class (AHRS300CC) noise: seed 001 Table 1, mean over the four
+  chamber temperatures: gyro-Y ARW 2.8946 deg/sqrt(h), accelerometer-Y VRW
+  0.2797 m/s/sqrt(h); per-temperature values for the chamber records.
+* Biases and scale factors: seed 000 Tables 4.1/4.2 (RGA300CA, Crossbow):
+  accelerometer-Y bias 2.4233 mg, yaw-gyro bias 0.2813 deg/s and scale-factor
+  error -0.3984 %; resolutions (quantization LSB) 1 mg and 0.025 deg/s and the
+  rate-table sequence 0 -> 80 -> -80 -> 0 deg/s in 10 deg/s steps from seed 000
+  Table 5.4 and section 4.3.
+* Gyro array: seed 004 Table 5.1 (ADIS16265 board at 102.4 Hz), per-gyro ARW in
+  deg/sqrt(s) and RRW in deg/sqrt(s^3); typical values 0.068 / 0.00029 (eq. 5.4);
+  equicorrelation as in eq. 6.36 (uncorrelated by default, the thesis' working
+  assumption for separately packaged sensors).
+* Chamber: seed 001, -30 to +60 C every 10 C, 100 Hz.
+
+Values not given by the seeds are design choices, stated where they are set:
+the higher-order Gauss-Markov component of the paper records (seed 002 Fig. 2
+shows its shape, not its size), bias instabilities, temperature coefficients,
+and the effect sizes of the residual-loop scenarios (chosen so that 5 minutes
+at 100 Hz show each effect well above the estimation noise while it stays a
+few per cent of the signal variance).
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from data_synth.arrays import CorrelatedRandomWalk, CorrelatedWhiteNoise
+from data_synth.effects import (
+    AuxInput,
+    BiasStep,
+    ConstantBias,
+    Drift,
+    Quantizer,
+    ScaleFactorError,
+    TemperatureBias,
+    Vibration,
+)
+from data_synth.profiles import CHAMBER_LEVELS_C, StepProfile, WarmUp
+from data_synth.record import SynthRecord, compose
+from data_synth.sources import (
+    BiasInstability,
+    GaussMarkov,
+    NonlinearAR,
+    TemperatureWhiteNoise,
+    WhiteNoise,
+)
+from data_synth.units import (
+    ACCEL_UNIT,
+    arw_to_density,
+    mg_to_mps2,
+    rate_factor,
+    rrw_to_density,
+    vrw_to_density,
+)
+from fosmodel.exceptions import InputError
+
+#: Seed 001 Table 1, AHRS300CC: chamber temperatures and Y-axis noise coefficients.
+CC300_TEMPS_C = (-30.0, 0.0, 30.0, 60.0)
+CC300_GYRO_ARW = (3.0994, 2.6285, 2.8262, 3.0243)  # deg/sqrt(h)
+CC300_ACCEL_VRW = (0.3397, 0.2696, 0.2283, 0.2811)  # m/s/sqrt(h)
+
+#: Seed 004 Table 5.1 (15-18 April): per-gyro ARW deg/sqrt(s) and RRW deg/sqrt(s^3).
+ARRAY_ARW = (0.07118, 0.06882, 0.06434, 0.07874, 0.06654, 0.08422, 0.06221, 0.06654)
+ARRAY_RRW = (0.00032, 0.00018, 0.00027, 0.00039, 0.00028, 0.00015, 0.00033, 0.00029)
+#: Seed 004 eq. 5.4: typical ARW and RRW.
+ARRAY_TYPICAL = (0.068, 0.00029)
+
+#: Rate-table sequence of seed 000 section 4.3 (33 levels, deg/s).
+RATE_TABLE_LEVELS = tuple(range(0, 81, 10)) + tuple(range(70, -81, -10)) + tuple(range(-70, 1, 10))
+
+LOOP_RATE, LOOP_DURATION = 100.0, 300.0
+#: Off the FFT grid for the default 300 s (7.3137 * 300 = 2194.11 bins).
+VIBRATION_HZ = 7.3137
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A registered preset.
+
+    ``build(**params)`` returns the keyword arguments of
+    :func:`~data_synth.record.compose` other than duration, rate, seed and
+    names (``sources``, ``target``, ``units``...); a builder that declares a
+    ``duration`` parameter receives the record length.
+    """
+
+    name: str
+    description: str
+    duration: float
+    rate: float
+    build: Callable[..., dict[str, Any]]
+
+    def parameters(self) -> list[str]:
+        """Names of the parameters a caller may override."""
+        return [p for p in inspect.signature(self.build).parameters if p != "duration"]
+
+
+SCENARIOS: dict[str, Scenario] = {}
+
+
+def _register(name: str, duration: float, rate: float, description: str):
+    def deco(fn):
+        SCENARIOS[name] = Scenario(name, description, duration, rate, fn)
+        return fn
+
+    return deco
+
+
+def list_scenarios() -> dict[str, str]:
+    """Scenario names with their one-line descriptions."""
+    return {name: s.description for name, s in SCENARIOS.items()}
+
+
+def make_scenario(
+    name: str,
+    *,
+    duration: float | None = None,
+    rate: float | None = None,
+    seed: int = 0,
+    **overrides: Any,
+) -> SynthRecord:
+    """Generate the record of a named scenario.
+
+    Parameters
+    ----------
+    name : str
+        A key of :func:`list_scenarios`.
+    duration, rate : float, optional
+        Seconds and Hz; None keeps the scenario's default.
+    seed : int
+        Non-negative seed; the same seed gives the same record.
+    **overrides
+        Scenario parameters (e.g. ``units="deg/h"``, ``rho_arw=-0.1``); see
+        :meth:`Scenario.parameters`.
+
+    Raises
+    ------
+    fosmodel.exceptions.InputError
+        Unknown scenario or parameter, or values that cannot be used.
+    """
+    if name not in SCENARIOS:
+        raise InputError(f"unknown scenario {name!r}; choose from {', '.join(SCENARIOS)}")
+    sc = SCENARIOS[name]
+    unknown = sorted(set(overrides) - set(sc.parameters()))
+    if unknown:
+        raise InputError(
+            f"scenario {name!r} has no parameter {unknown}; it takes {sc.parameters()}"
+        )
+    duration = sc.duration if duration is None else duration
+    rate = sc.rate if rate is None else rate
+    try:
+        if "duration" in inspect.signature(sc.build).parameters:
+            overrides["duration"] = duration
+        spec = sc.build(**overrides)
+        return compose(
+            duration=duration,
+            rate=rate,
+            seed=seed,
+            scenario=name,
+            description=sc.description,
+            **spec,
+        )
+    except ValueError as exc:
+        raise InputError(f"scenario {name!r}: {exc}") from exc
+
+
+# --- paper-like records (seed 002) --------------------------------------------------------
+
+
+@_register(
+    "paper_accel_y",
+    3600.0,
+    200.0,
+    "FOS-paper-like CC-300 accelerometer-Y: VRW + 2nd-order GM + bias instability + bias, 1 mg LSB",
+)
+def _paper_accel_y(gm_order=2):
+    sources = [
+        ConstantBias(mg_to_mps2(2.4233), name="bias"),
+        WhiteNoise(vrw_to_density(sum(CC300_ACCEL_VRW) / 4), name="white"),
+        # Design choice: ~5 mg correlated component with 1 s stages (seed 002 Fig. 2 shape).
+        GaussMarkov(0.05, 1.0, order=gm_order, name="gm"),
+        # Design choice: 0.5 mg bias instability, flicker band 0.1 s to 1000 s.
+        BiasInstability(mg_to_mps2(0.5), 0.1, 1000.0, name="bias_instability"),
+    ]
+    return dict(
+        sources=sources, target="accel_y", units=ACCEL_UNIT, quantizer=Quantizer(mg_to_mps2(1.0))
+    )
+
+
+@_register(
+    "paper_gyro_y",
+    3600.0,
+    200.0,
+    "FOS-paper-like CC-300 gyro-Y: ARW + 2nd-order GM + "
+    "bias instability + bias, 0.025 deg/s LSB (units deg/s or deg/h)",
+)
+def _paper_gyro_y(units="deg/s", gm_order=2):
+    k = rate_factor(units)
+    sources = [
+        ConstantBias(0.2813 * k, name="bias"),
+        WhiteNoise(arw_to_density(sum(CC300_GYRO_ARW) / 4, units), name="white"),
+        # Design choice: 0.5 deg/s correlated component, 0.5 s stages (seed 002 Fig. 2 shape).
+        GaussMarkov(0.5 * k, 0.5, order=gm_order, name="gm"),
+        # Design choice: 0.01 deg/s bias instability (seed 004's better gyro: 0.006 deg/s).
+        BiasInstability(0.01 * k, 0.1, 1000.0, name="bias_instability"),
+    ]
+    return dict(sources=sources, target="gyro_y", units=units, quantizer=Quantizer(0.025 * k))
+
+
+# --- gyro array (seed 004) ----------------------------------------------------------------
+
+
+@_register(
+    "gyro_array_8",
+    3600.0,
+    102.4,
+    "8 gyros (gyro_1..gyro_8) with seed 004 Table 5.1 "
+    "ARW/RRW; optional equicorrelation rho_arw / rho_rrw",
+)
+def _gyro_array_8(units="deg/s", rho_arw=0.0, rho_rrw=0.0, typical=False):
+    names = tuple(f"gyro_{i}" for i in range(1, 9))
+    arw = (ARRAY_TYPICAL[0],) * 8 if typical else ARRAY_ARW
+    rrw = (ARRAY_TYPICAL[1],) * 8 if typical else ARRAY_RRW
+    sources = [
+        CorrelatedWhiteNoise(
+            names, [arw_to_density(a, units, per="sqrt(s)") for a in arw], rho_arw, name="arw"
+        ),
+        CorrelatedRandomWalk(names, [rrw_to_density(r, units) for r in rrw], rho_rrw, name="rrw"),
+    ]
+    return dict(
+        sources=sources, target="gyro_1", units=units, column_units={n: units for n in names}
+    )
+
+
+# --- temperature chamber (seed 001) and rate table (seed 000) ------------------------------
+
+
+def _chamber(target, units, bias_coefs, densities):
+    sources = [
+        # Sensor temperature follows the chamber set points with a 60 s thermal lag (choice).
+        StepProfile(CHAMBER_LEVELS_C, lag_s=60.0, channel="temp_c", name="chamber"),
+        # Temperature read-out noise 0.02 C per sample at 100 Hz (choice).
+        WhiteNoise(0.002, channel="temp_c", name="temp_noise"),
+        TemperatureBias(bias_coefs, t_ref_c=25.0, name="temperature_bias"),
+        TemperatureWhiteNoise(CC300_TEMPS_C, densities, name="white"),
+    ]
+    return dict(sources=sources, target=target, units=units, column_units={"temp_c": "degC"})
+
+
+@_register(
+    "temp_chamber_gyro",
+    3600.0,
+    100.0,
+    "CC-300 gyro-Y in a thermal chamber, -30..+60 C "
+    "steps: temp_c column, quadratic temperature bias, temperature-dependent ARW",
+)
+def _temp_chamber_gyro(units="deg/s"):
+    k = rate_factor(units)
+    # Bias 0.2813 deg/s at 25 C (seed 000); 0.006 deg/s/C and 1e-4 deg/s/C^2 are choices.
+    return _chamber(
+        "gyro_y",
+        units,
+        (0.2813 * k, 0.006 * k, 1e-4 * k),
+        [arw_to_density(a, units) for a in CC300_GYRO_ARW],
+    )
+
+
+@_register(
+    "temp_chamber_accel",
+    3600.0,
+    100.0,
+    "CC-300 accelerometer-Y in a thermal chamber, "
+    "-30..+60 C steps: temp_c column, quadratic temperature bias, temperature-dependent VRW",
+)
+def _temp_chamber_accel():
+    # Bias 2.4233 mg at 25 C (seed 000); 0.05 mg/C and 0.002 mg/C^2 are choices.
+    return _chamber(
+        "accel_y",
+        ACCEL_UNIT,
+        tuple(mg_to_mps2(c) for c in (2.4233, 0.05, 0.002)),
+        [vrw_to_density(v) for v in CC300_ACCEL_VRW],
+    )
+
+
+@_register(
+    "rate_table_gyro",
+    660.0,
+    100.0,
+    "Yaw gyro on a rate table, 0->80->-80->0 deg/s in "
+    "10 deg/s steps (seed 000): rate_ref column, scale-factor error -0.3984 %, bias, ARW",
+)
+def _rate_table_gyro():
+    sources = [
+        StepProfile(RATE_TABLE_LEVELS, lag_s=0.5, channel="rate_ref", name="table"),
+        AuxInput("rate_ref", {0: 1.0}, name="true_rate"),
+        ScaleFactorError(-0.003984, "rate_ref", name="scale_factor"),
+        ConstantBias(0.2813, name="bias"),
+        WhiteNoise(arw_to_density(2.25), name="white"),  # RGA300CA spec < 2.25 deg/sqrt(h)
+    ]
+    return dict(sources=sources, target="gyro_z", units="deg/s", column_units={"rate_ref": "deg/s"})
+
+
+# --- residual-loop records: one undeclared effect each --------------------------------------
+
+
+def _base() -> GaussMarkov:
+    """CC-300-class gyro noise (0.5 deg/s, cf. ARW 2.9 deg/sqrt(h) = 0.48 deg/s at 100 Hz)
+    coloured by a two-pole response: 2nd-order GM with 0.02 s stages, an exact AR(2)."""
+    return GaussMarkov(0.5, 0.02, order=2, name="base")
+
+
+def _warmup_temperature() -> list:
+    """temp_c column: 22 C warming by 12 C with a 90 s time constant, 0.02 C read-out noise."""
+    return [
+        WarmUp(22.0, 12.0, 90.0, channel="temp_c", name="temp_warmup"),
+        WhiteNoise(0.002, channel="temp_c", name="temp_noise"),
+    ]
+
+
+def _temperature_bias() -> TemperatureBias:
+    """0.02 deg/s/C and 0.001 deg/s/C^2 about 25 C: about 0.3 deg/s over the warm-up."""
+    return TemperatureBias(
+        (0.0, 0.02, 0.001), t_ref_c=25.0, declared=False, name="temperature_bias"
+    )
+
+
+def _vibration() -> Vibration:
+    """0.1 deg/s sinusoid at 7.3137 Hz (off the FFT grid of the default record)."""
+    return Vibration(VIBRATION_HZ, (0.1,), (0.7,), declared=False, name="vibration")
+
+
+def _loop(*sources, **units):
+    return dict(sources=list(sources), target="gyro_x", units="deg/s", column_units=units)
+
+
+@_register(
+    "clean",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Control: gyro_x with only the AR(2) (2nd-order GM) base noise",
+)
+def _clean():
+    return _loop(_base())
+
+
+@_register(
+    "unrelated_temperature",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Control: base noise plus a warming temp_c column that does not affect gyro_x",
+)
+def _unrelated_temperature():
+    return _loop(_base(), *_warmup_temperature(), temp_c="degC")
+
+
+@_register(
+    "undeclared_temperature",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Base noise plus an undeclared quadratic bias in the warming temp_c column",
+)
+def _undeclared_temperature():
+    return _loop(_base(), *_warmup_temperature(), _temperature_bias(), temp_c="degC")
+
+
+@_register(
+    "undeclared_vibration",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Base noise plus an undeclared 0.1 deg/s vibration at 7.3137 Hz (off the FFT grid)",
+)
+def _undeclared_vibration():
+    return _loop(_base(), _vibration())
+
+
+@_register(
+    "undeclared_nonlinear",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Undeclared bounded cross-product "
+    "dynamics: y[n] = 0.5 y[n-1] - 0.2 y[n-2] + 0.2 y[n-1] y[n-2] + e[n]",
+)
+def _undeclared_nonlinear():
+    # Cross term ~1 % of the innovation variance; escape radius 3.5 deg/s = 8.9 std.
+    return _loop(NonlinearAR((0.5, -0.2), ((1, 2, 0.2),), 0.35, declared=False, name="nonlinear"))
+
+
+@_register(
+    "undeclared_drift",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Base noise plus an undeclared drift: 1.2 deg/s/h linear and 0.2 deg/s warm-up (60 s)",
+)
+def _undeclared_drift():
+    drift = Drift(1.2, 0.2, 60.0, declared=False, name="drift")
+    return _loop(_base(), drift)
+
+
+@_register(
+    "undeclared_aux_lag",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Base noise plus undeclared "
+    "g-sensitivity: the accel_x column enters gyro_x 3 samples late (0.03 deg/s per m/s^2)",
+)
+def _undeclared_aux_lag():
+    return _loop(
+        _base(),
+        # accel_x: 2 m/s^2 vehicle motion (GM, 0.05 s) plus CC-300 accelerometer noise.
+        GaussMarkov(2.0, 0.05, channel="accel_x", name="accel_motion"),
+        WhiteNoise(vrw_to_density(sum(CC300_ACCEL_VRW) / 4), channel="accel_x", name="accel_noise"),
+        AuxInput("accel_x", {3: 0.03}, declared=False, name="g_sensitivity"),
+        accel_x=ACCEL_UNIT,
+    )
+
+
+@_register(
+    "undeclared_step",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Base noise plus an undeclared 0.15 deg/s bias step at 55 % of the record (or at step_time_s)",
+)
+def _undeclared_step(duration, step_time_s=None):
+    time_s = 0.55 * duration if step_time_s is None else step_time_s
+    return _loop(_base(), BiasStep((time_s,), (0.15,), declared=False, name="bias_step"))
+
+
+@_register(
+    "temperature_and_vibration",
+    LOOP_DURATION,
+    LOOP_RATE,
+    "Base noise plus two undeclared effects: the temp_c quadratic bias and the 7.3137 Hz vibration",
+)
+def _temperature_and_vibration():
+    return _loop(_base(), *_warmup_temperature(), _temperature_bias(), _vibration(), temp_c="degC")

@@ -1,0 +1,72 @@
+"""Correlated noise across the gyros of an array (data_synth.arrays)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from data_synth.arrays import (
+    CorrelatedRandomWalk,
+    CorrelatedWhiteNoise,
+    correlated_normal,
+    correlation_matrix,
+)
+from data_synth.record import source_rng
+
+Z = 4.5
+NAMES = tuple(f"gyro_{i}" for i in range(1, 9))
+
+
+def test_equicorrelation_matrix_and_its_bound():
+    c = correlation_matrix(-0.1, 8)
+    assert c.shape == (8, 8) and np.all(np.diag(c) == 1) and c[0, 5] == -0.1
+    correlation_matrix(-1 / 7, 8)  # the limit of seed 004 eq. 6.38 is allowed
+    with pytest.raises(ValueError, match="rho >= -0.142857"):
+        correlation_matrix(-0.2, 8)
+    with pytest.raises(ValueError):
+        correlation_matrix(np.array([[1.0, 0.5], [0.4, 1.0]]), 2)
+
+
+def test_correlated_draws_have_the_requested_correlation():
+    n = 100_000
+    target = correlation_matrix(0.3, 4)
+    target[0, 1] = target[1, 0] = -0.2
+    z = correlated_normal(n, target, source_rng(0, "c"))
+    est = np.corrcoef(z.T)
+    tol = Z * (1 - target**2) / math.sqrt(n)
+    assert np.all(np.abs(est - target) <= tol + 1e-12)
+
+
+def test_correlated_white_noise_per_gyro_density_and_correlation():
+    rate, n = 102.4, 100_000
+    densities = [0.07118, 0.06882, 0.06434, 0.07874, 0.06654, 0.08422, 0.06221, 0.06654]
+    src = CorrelatedWhiteNoise(NAMES, densities, -0.1)
+    x = src.generate(n, rate, source_rng(0, "w"))
+    assert x.shape == (n, 8) and src.outputs("gyro_1") == NAMES
+    sd = x.std(axis=0) / (np.array(densities) * math.sqrt(rate))
+    assert np.all(np.abs(sd - 1) < Z / math.sqrt(2 * n))
+    r = np.corrcoef(x.T)[np.triu_indices(8, 1)]
+    assert np.all(np.abs(r + 0.1) < Z * (1 - 0.01) / math.sqrt(n))
+    t = src.truth(rate, "deg/s", x)
+    assert t["params"]["arw"][0] == pytest.approx(0.07118 * 60)
+    assert len(t["component_std"]) == 8 and t["terms"] is None
+
+
+def test_correlated_random_walk_increments():
+    rate, n = 102.4, 50_000
+    src = CorrelatedRandomWalk(NAMES[:3], [0.00029], 0.5)
+    x = src.generate(n, rate, source_rng(0, "r"))
+    inc = np.diff(x, axis=0)
+    assert np.all(np.abs(inc.std(axis=0) / (0.00029 / math.sqrt(rate)) - 1) < Z / math.sqrt(2 * n))
+    r = np.corrcoef(inc.T)[np.triu_indices(3, 1)]
+    assert np.all(np.abs(r - 0.5) < Z * (1 - 0.25) / math.sqrt(n))
+    assert src.truth(rate, "deg/s", x)["params"]["rrw"] == [0.00029] * 3
+
+
+def test_array_sources_validate_channels():
+    with pytest.raises(ValueError):
+        CorrelatedWhiteNoise(("g1", "g1"), [0.1], 0.0)
+    with pytest.raises(ValueError):
+        CorrelatedWhiteNoise(("g1", "y"), [0.1], 0.0)
+    with pytest.raises(ValueError):
+        CorrelatedWhiteNoise(("g1", "g2"), [0.1, 0.2, 0.3], 0.0)
