@@ -16,12 +16,10 @@ from __future__ import annotations
 
 import logging
 import math
-import warnings
 from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
-from scipy.signal import lfilter, lfiltic
 from sklearn.base import BaseEstimator
 
 from . import __version__
@@ -35,7 +33,15 @@ from .candidates import (
     generate_terms,
 )
 from .correlations import LagCorrelations
-from .exceptions import InputError, UnstableModelWarning
+from .dynamics import (
+    ar_free_run,
+    ar_roots,
+    cut_at_divergence,
+    free_run_inputs,
+    is_stable,
+    warn_if_unstable,
+)
+from .exceptions import InputError
 from .fos import StopRule, _DataCorrelations, _fos_kernel, center
 from .summary import Summary
 from .validation import as_channels, as_signal
@@ -271,13 +277,17 @@ class FOSModel(BaseEstimator):
 
     def ar_roots(self) -> np.ndarray:
         """Roots of ``z^L - a_1 z^(L-1) - ... - a_L`` for the linear output dynamics."""
-        a = np.trim_zeros(self.ar_coefficients(), "b")
-        return np.roots(np.r_[1.0, -a]) if len(a) else np.empty(0)
+        return ar_roots(self.ar_coefficients())
 
     def is_stable(self) -> bool:
         """Whether every root of the linear output dynamics lies inside the unit circle."""
-        roots = self.ar_roots()
-        return bool(np.all(np.abs(roots) < 1.0))
+        return is_stable(self.ar_coefficients())
+
+    @property
+    def n_terms_(self) -> int:
+        """Number of selected terms besides the constant."""
+        self._check_fitted()
+        return len(self.terms_)
 
     def simulate(
         self,
@@ -312,34 +322,17 @@ class FOSModel(BaseEstimator):
             (the samples from the divergence on are NaN).
         """
         self._check_fitted()
-        y0 = as_signal(y_init, "y_init")
-        n0 = self.lag_window_
-        if len(y0) < n0:
-            raise InputError(f"y_init has {len(y0)} samples; the model needs at least {n0}")
-        if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 0:
-            raise InputError(f"n_steps must be a non-negative integer, got {n_steps!r}")
+        y0, drive = free_run_inputs(y_init, n_steps, noise, self.lag_window_)
+        warn_if_unstable(self.ar_coefficients(), "the fitted output dynamics")
         start, total = len(y0), len(y0) + int(n_steps)
-        drive = np.zeros(n_steps) if noise is None else as_signal(noise, "noise")
-        if len(drive) != n_steps:
-            raise InputError(f"noise has {len(drive)} samples, n_steps is {n_steps}")
-        if not self.is_stable():
-            rho = float(np.max(np.abs(self.ar_roots())))
-            warnings.warn(UnstableModelWarning(
-                f"the fitted output dynamics are unstable (largest root modulus {rho:.4f}); "
-                "the free run grows without bound"), stacklevel=2)
         signals = self._signals(np.r_[y0, np.zeros(n_steps)], exog, total)
         ar, nonlinear, drive = self._split_terms(signals, start, drive)
         with np.errstate(over="ignore", invalid="ignore"):
             if nonlinear:
                 out = self._run_nonlinear(signals[OUTPUT], start, ar, nonlinear, drive)
             else:
-                out = self._run_linear(signals[OUTPUT][:start], ar, drive)
-        bad = np.flatnonzero(~np.isfinite(out))
-        if bad.size:
-            warnings.warn(UnstableModelWarning(
-                f"the free run diverged at step {bad[0]}; later samples are NaN"), stacklevel=2)
-            out[bad[0]:] = np.nan
-        return out + self.offsets_[OUTPUT]
+                out = ar_free_run(ar, signals[OUTPUT][:start], drive)
+        return cut_at_divergence(out) + self.offsets_[OUTPUT]
 
     def _split_terms(self, signals, start, drive):
         """Split the terms into AR weights, a drive (terms free of y) and nonlinear terms.
@@ -361,14 +354,6 @@ class FOSModel(BaseEstimator):
                 nonlinear.append((c * evaluate_terms([rest], signals, start)[:, 0],
                                   np.asarray(y_lags)))
         return ar, nonlinear, drive
-
-    @staticmethod
-    def _run_linear(y_past: np.ndarray, ar: np.ndarray, drive: np.ndarray) -> np.ndarray:
-        if len(drive) == 0:
-            return drive.copy()
-        a = np.r_[1.0, -ar]
-        zi = lfiltic([1.0], a, y_past[::-1][: len(ar)])
-        return lfilter([1.0], a, drive, zi=zi)[0]
 
     @staticmethod
     def _run_nonlinear(y, start, ar, nonlinear, drive):
