@@ -1,4 +1,4 @@
-"""Command line: ``fosmodel fit | predict | synth | demo``.
+"""Command line: ``fosmodel fit | predict | study | synth | demo``.
 
 Exit codes: 0 success, 2 bad input or usage (one-line message on stderr),
 1 internal error (with a hint to report it; ``--verbose`` shows the traceback).
@@ -42,6 +42,32 @@ def _positive_float(text: str) -> float:
     if not np.isfinite(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
     return value
+
+
+def _int_list(text: str) -> list[int]:
+    """``1-10`` or ``1,2,5`` or ``1-3,8`` -> a list of integers."""
+    out = []
+    for part in text.split(","):
+        lo, sep, hi = part.strip().partition("-")
+        try:
+            out.extend(range(int(lo), int(hi) + 1) if sep else [int(lo)])
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected integers like 1-10 or 1,2,5, got {text!r}"
+                                             ) from None
+    return out
+
+
+def _name_list(text: str) -> list[str]:
+    return [p.strip() for p in text.split(",") if p.strip()]
+
+
+def _split_arg(text: str) -> tuple[float, float]:
+    try:
+        train, evaluate = (float(p) for p in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected TRAIN_S,EVALUATE_S (e.g. 180,180), got {text!r}"
+                                         ) from None
+    return train, evaluate
 
 
 def _out_path(path: str) -> Path:
@@ -108,6 +134,34 @@ def _cmd_predict(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_study(args: argparse.Namespace) -> int:
+    from .harness import StudyConfig, run_study
+    from .report import paper_table, write_study
+
+    json_path = _out_path(args.json) if args.json else None
+    rec = load_record(args.file, rate=args.rate)
+    y = rec.column(args.column)
+    protocols = ["paper", "fair"] if args.protocol == "both" else [args.protocol]
+    config = StudyConfig(
+        rate=rec.require_rate(), sensor=args.sensor, units=args.units, orders=args.orders,
+        degrees=args.degrees, methods=args.methods, protocols=protocols, train_s=args.split[0],
+        evaluate_s=args.split[1], horizon_s=args.horizon, n_starts=args.starts,
+        paper_denoise=args.denoise, fos_stop=args.stop,
+    )
+    result = run_study(y, config, progress=sys.stderr.isatty())
+    title = args.title or f"{args.column} of {Path(args.file).name}"
+    out = Path(args.out)
+    write_study(result, out, title)
+    print(paper_table(result).to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    for note in result.warnings:
+        print(f"fosmodel: warning: {note}", file=sys.stderr)
+    if json_path:
+        write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
+    print(f"study of {len(result.rows)} fits written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else ""))
+    return 0
+
+
 def _cmd_synth(args: argparse.Namespace) -> int:
     from data_synth.cli import run
 
@@ -151,6 +205,33 @@ def build_parser() -> argparse.ArgumentParser:
     pred.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
     pred.add_argument("--out", required=True, help="CSV to write")
     pred.set_defaults(func=_cmd_predict)
+
+    study = sub.add_parser("study", help="model-order study: every method, order and degree")
+    study.add_argument("file", help="CSV, .npy or .parquet record")
+    study.add_argument("--column", required=True, help="column to model")
+    study.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
+    study.add_argument("--sensor", required=True, choices=("accel", "gyro"))
+    study.add_argument("--units", required=True,
+                       help="units of the column: m/s^2, g, mg (accel); rad/s, deg/s, deg/h (gyro)")
+    study.add_argument("--orders", type=_int_list, default=list(range(1, 11)),
+                       help="model orders, e.g. 1-10 (default) or 1,2,5")
+    study.add_argument("--degrees", type=_int_list, default=[1, 2],
+                       help="FOS cross-product degrees (default 1,2)")
+    study.add_argument("--methods", type=_name_list, default=["fos", "yw", "cov", "burg", "gm"],
+                       help="comma-separated among fos,yw,cov,burg,gm (default all)")
+    study.add_argument("--protocol", choices=("paper", "fair", "both"), default="both")
+    study.add_argument("--split", type=_split_arg, default=(180.0, 180.0),
+                       help="training and evaluation seconds (default 180,180)")
+    study.add_argument("--horizon", type=_positive_float, default=30.0,
+                       help="outage horizon in seconds (default 30)")
+    study.add_argument("--starts", type=int, default=20, help="outage starts (default 20)")
+    study.add_argument("--denoise", choices=("wavelet", "kaiser"), default="wavelet",
+                       help="denoiser of the baselines under the paper protocol")
+    study.add_argument("--stop", choices=STOP_RULES, default="korenberg", help="FOS stopping rule")
+    study.add_argument("--title", help="title of the report")
+    study.add_argument("--out", required=True, help="output directory (created)")
+    study.add_argument("--json", help="also write every row and the best rows as JSON")
+    study.set_defaults(func=_cmd_study)
 
     from data_synth.cli import configure_parser
 

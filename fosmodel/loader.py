@@ -228,7 +228,7 @@ def _rate_from_time(time, rate, src, name, first_line, notes) -> float:
             f"{src}: column {name!r}, {where} {i + first_line}: a gap of {dt[gaps[0]]:.6g} s "
             f"where the sample interval is {step:.6g} s ({gaps.size} gap(s) in the record)"
         )
-    measured = 1.0 / step
+    measured = (len(time) - 1) / (time[-1] - time[0])  # uniform: the span is the best estimate
     if rate is not None and abs(measured - rate) > _RATE_TOLERANCE * rate:
         raise InputError(f"{src}: --rate {rate:g} Hz disagrees with the time column "
                          f"({measured:.6g} Hz)")

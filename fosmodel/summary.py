@@ -44,20 +44,25 @@ class Summary:
 
     def as_markdown(self) -> str:
         head = "\n".join(f"- **{k}**: {v}" for k, v in self.info)
-        cols = list(self.table.columns)
-        rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-        for rec in self.table.itertuples(index=False):
-            rows.append("| " + " | ".join(_cell(v) for v in rec) + " |")
         notes = "\n".join(f"{i + 1}. {n}" for i, n in enumerate(self.notes))
-        body = f"### {self.title}\n\n{head}\n\n" + "\n".join(rows)
+        body = f"### {self.title}\n\n{head}\n\n{markdown_table(self.table)}"
         return body + (f"\n\n{notes}" if notes else "")
+
+
+def markdown_table(frame: pd.DataFrame, digits: int = 6) -> str:
+    """A pipe table; floats with ``digits`` significant digits, NaN as an empty cell."""
+    cols = [str(c) for c in frame.columns]
+    rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    for rec in frame.itertuples(index=False):
+        rows.append("| " + " | ".join(_cell(v, digits) for v in rec) + " |")
+    return "\n".join(rows)
 
 
 def _fmt(v: float) -> str:
     return f"{v:.6g}"
 
 
-def _cell(v: object) -> str:
+def _cell(v: object, digits: int = 6) -> str:
     if isinstance(v, float):
-        return "" if v != v else _fmt(v)
+        return "" if v != v else f"{v:.{digits}g}"
     return str(v)

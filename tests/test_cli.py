@@ -109,14 +109,19 @@ def test_existing_output_survives_a_failed_run(record, tmp_path, capsys):
     assert code == 2 and model.read_text() == "previous"
 
 
-def test_demo_writes_outputs_and_says_where(tmp_path, capsys):
+def test_demo_writes_outputs_and_says_where(tmp_path, capsys):  # the main job, end to end
     code, out, err = _run(["demo", "--out", tmp_path / "demo"], capsys)
     assert code == 0, err
     assert f"outputs written to {(tmp_path / 'demo').resolve()}" in out
-    table = pd.read_csv(tmp_path / "demo" / "comparison.csv")
-    assert set(table["method"]) == {"FOS (L=10, CP=1)", "Burg AR(10)"}
-    assert np.all(table["one_step_mse"] > 0)
-    assert (tmp_path / "demo" / "gyroscope_fos_model.json").exists()
+    assert "Table 1: accelerometer" in out and "Table 2: gyroscope" in out
+    for sensor, units in (("accelerometer", "m/s^2"), ("gyroscope", "deg/h")):
+        table = pd.read_csv(tmp_path / "demo" / sensor / "comparison.csv")
+        assert set(table["Method"]) == {"Yule-Walker", "Covariance", "Burg", "Gauss-Markov",
+                                        "FOS CP=1", "FOS CP=2"}
+        assert list(table["Order L"].unique()) == [1, 10]
+        assert np.all(table[f"MSE ({units})^2"] > 0)
+        for name in ("report.md", "study.csv", "order_paper.png", "order_fair.svg"):
+            assert (tmp_path / "demo" / sensor / name).exists()
 
 
 def test_console_script_is_installed(record, tmp_path):
@@ -124,3 +129,53 @@ def test_console_script_is_installed(record, tmp_path):
     proc = subprocess.run([script, "fit", str(record), "--column", "nope",
                            "--out", str(tmp_path / "m.json")], capture_output=True, text=True)
     assert proc.returncode == 2 and "no column 'nope'" in proc.stderr
+
+
+@pytest.fixture
+def long_record(tmp_path):
+    rng = np.random.default_rng(1)
+    n = 9000
+    accel = lfilter([1.0], [1.0, -0.9, 0.4], rng.standard_normal(n)) * 1e-3
+    path = tmp_path / "accel.csv"
+    pd.DataFrame({"time": np.arange(n) / 10.0, "accel_y": accel}).to_csv(path, index=False)
+    return path
+
+
+def test_study_writes_report_and_json(long_record, tmp_path, capsys):
+    out, js = tmp_path / "study", tmp_path / "rows.json"
+    code, stdout, err = _run(["study", long_record, "--column", "accel_y", "--sensor", "accel",
+                              "--units", "m/s^2", "--orders", "1-3", "--degrees", "1,2",
+                              "--split", "300,200", "--starts", "5", "--out", out,
+                              "--json", js], capsys)
+    assert code == 0, err
+    assert "Yule-Walker" in stdout and "FOS CP=2" in stdout and "written to" in stdout
+    assert (out / "report.md").exists() and (out / "order_fair.svg").exists()
+    data = json.loads(js.read_text())
+    assert len(data["rows"]) == 2 * (3 * 2 + 3 * 3 + 1)
+    assert {"method", "order", "degree", "mse", "position_error_m", "outage_mse", "bias_rms",
+            "outage_position_error_m", "runtime_s", "n_terms", "protocol"} <= set(data["rows"][0])
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [(["--split", "600,300"], "leaves 0 samples to predict"),
+     (["--split", "600,250"], "leaves 500 samples to predict, 600 are needed (a 30 s "
+                              "outage horizon and two 30 s bias windows)"),
+     (["--methods", "fos,arima"], "unknown method 'arima'"),
+     (["--units", "deg/s"], "deg/s"),
+     (["--column", "accel_x"], "no column 'accel_x' (did you mean 'accel_y'?)")],
+)
+def test_study_bad_input_exit_2(long_record, tmp_path, capsys, extra, message):
+    args = ["study", long_record, "--column", "accel_y", "--sensor", "accel", "--units", "m/s^2",
+            "--out", tmp_path / "out", "--json", tmp_path / "rows.json", *extra]
+    code, _, err = _run(args, capsys)
+    assert code == 2 and err.count("\n") == 1 and message in err
+    assert not (tmp_path / "out").exists() and not (tmp_path / "rows.json").exists()
+
+
+def test_study_empty_file_exit_2(tmp_path, capsys):
+    empty = tmp_path / "empty.csv"
+    empty.write_text("")
+    code, _, err = _run(["study", empty, "--column", "a", "--sensor", "gyro", "--units", "deg/s",
+                         "--out", tmp_path / "o"], capsys)
+    assert code == 2 and "the file is empty" in err

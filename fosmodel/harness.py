@@ -1,0 +1,299 @@
+"""Train / evaluate / predict harness: every method fit, selected and scored the same way.
+
+As in section 5 of the FOS paper, a record is split by duration into a
+training segment (3 min), an evaluation segment (3 min) and the novel
+prediction segment (the rest).  Every configuration (method, order, degree) is
+fit on the training samples alone; each method's best configuration is the
+one with the lowest one-step MSE on the evaluation segment; every
+configuration is scored on the prediction segment, which no choice has seen.
+
+Two protocols:
+
+``paper``
+    The baselines are fit and scored on denoised data (the paper used a
+    4-level wavelet low pass), FOS on the raw data, as the paper did.
+``fair``
+    Every method is fit and scored on the same raw data.
+
+Denoising is applied to the training samples alone for fitting (so that no
+later sample leaks into a fit through the filter), and to the whole record for
+scoring.  Runtime is measured around ``fit`` only.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+import warnings
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from .baselines import METHOD_LABELS, make_baseline
+from .denoise import DENOISERS, denoise
+from .exceptions import InputError, UnstableModelWarning
+from .metrics import equivalent_position_error, one_step_mse, outage_metrics, to_si_scale
+from .model import FOSModel
+from .validation import as_signal
+
+METHODS = ("fos", "yw", "cov", "burg", "gm")
+PROTOCOLS = ("paper", "fair")
+
+
+@dataclass(frozen=True)
+class Split:
+    """Sample ranges of the three segments."""
+
+    train: slice
+    evaluate: slice
+    predict: slice
+
+    @classmethod
+    def by_duration(
+        cls, n: int, rate: float, train_s: float, evaluate_s: float, min_predict: int = 1,
+        why: str = "",
+    ) -> Split:
+        """Split ``n`` samples at ``rate`` Hz: ``train_s`` s, then ``evaluate_s`` s, then the rest.
+
+        Raises
+        ------
+        InputError
+            If a segment is empty or the prediction segment is shorter than ``min_predict``
+            (``why`` says what needs them).
+        """
+        a, b = round(train_s * rate), round((train_s + evaluate_s) * rate)
+        if a < 1 or b <= a:
+            raise InputError(f"the split {train_s:g} s / {evaluate_s:g} s leaves an empty "
+                             "training or evaluation segment")
+        if n - b < min_predict:
+            raise InputError(
+                f"the record has {n} samples ({n / rate:.6g} s at {rate:g} Hz); the split "
+                f"{train_s:g} s / {evaluate_s:g} s leaves {max(n - b, 0)} samples to predict, "
+                f"{min_predict} are needed{why}"
+            )
+        return cls(slice(0, a), slice(a, b), slice(b, n))
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """What a model-order study fits and how it scores.
+
+    Parameters
+    ----------
+    rate : float
+        Sample rate in Hz.
+    sensor, units : str
+        ``"accel"`` or ``"gyro"`` and the record's units (see :mod:`fosmodel.metrics`).
+    orders, degrees : sequence of int
+        Model orders (the maximum lag L) and FOS cross-product degrees.
+    methods : sequence of str
+        Among ``fos, yw, cov, burg, gm``.
+    protocols : sequence of str
+        ``paper`` and/or ``fair``.
+    train_s, evaluate_s : float
+        Segment durations.
+    horizon_s, n_starts, taus : outage metrics (see :func:`fosmodel.metrics.outage_metrics`).
+    paper_denoise : str
+        Denoiser of the baselines under the paper protocol (``wavelet`` or ``kaiser``).
+    fos_stop : str
+        FOS stopping rule.
+    """
+
+    rate: float
+    sensor: str
+    units: str
+    orders: Sequence[int] = tuple(range(1, 11))
+    degrees: Sequence[int] = (1, 2)
+    methods: Sequence[str] = METHODS
+    protocols: Sequence[str] = PROTOCOLS
+    train_s: float = 180.0
+    evaluate_s: float = 180.0
+    horizon_s: float = 30.0
+    n_starts: int = 20
+    taus: Sequence[float] = (1.0, 10.0, 30.0)
+    paper_denoise: str = "wavelet"
+    fos_stop: str = "korenberg"
+
+    def __post_init__(self) -> None:
+        for name in ("orders", "degrees", "methods", "protocols", "taus"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+        if not (np.isfinite(self.rate) and self.rate > 0):
+            raise InputError(f"the sample rate must be positive, got {self.rate!r}")
+        to_si_scale(self.sensor, self.units)
+        _check_choices("method", self.methods, METHODS)
+        _check_choices("protocol", self.protocols, PROTOCOLS)
+        _check_choices("denoiser", [self.paper_denoise], [d for d in DENOISERS if d != "none"])
+        for name, values in (("order", self.orders), ("degree", self.degrees)):
+            if not values or any(isinstance(v, bool) or int(v) != v or v < 1 for v in values):
+                raise InputError(f"every {name} must be an integer >= 1, got {list(values)}")
+        if self.horizon_s <= 0 or self.n_starts < 1:
+            raise InputError("the outage horizon must be positive and n_starts at least 1")
+
+    def configurations(self) -> list[tuple[str, int, int]]:
+        """Every (method, order, degree) to fit: FOS at each degree, AR at degree 1, GM once."""
+        out = []
+        for method in self.methods:
+            if method == "gm":
+                out.append(("gm", 1, 1))
+            else:
+                degrees = self.degrees if method == "fos" else (1,)
+                out.extend((method, int(L), int(d)) for L in self.orders for d in degrees)
+        return out
+
+    def denoiser(self, protocol: str, method: str) -> str | None:
+        """The denoiser a method's data go through under a protocol (None: raw data)."""
+        return self.paper_denoise if protocol == "paper" and method != "fos" else None
+
+
+def _check_choices(what: str, given: Sequence[str], valid: Sequence[str]) -> None:
+    if not given:
+        raise InputError(f"no {what} given; choose from {', '.join(valid)}")
+    bad = [g for g in given if g not in valid]
+    if bad:
+        raise InputError(f"unknown {what} {bad[0]!r}; choose from {', '.join(valid)}")
+
+
+def make_model(method: str, order: int, degree: int, config: StudyConfig):
+    """A fresh, unfitted model of one configuration."""
+    if method == "fos":
+        return FOSModel(max_lag=order, degree=degree, stop=config.fos_stop)
+    return make_baseline(method, order, rate=config.rate)
+
+
+def method_label(method: str, degree: int) -> str:
+    """``FOS CP=2``, ``Burg``, ...: the name of a method in tables and figures."""
+    return f"FOS CP={degree}" if method == "fos" else METHOD_LABELS[method]
+
+
+@dataclass
+class StudyResult:
+    """All scored configurations of a study.
+
+    Attributes
+    ----------
+    rows : DataFrame
+        One row per (protocol, method, order, degree): ``evaluate_mse`` (selection),
+        ``mse`` (one-step, prediction segment), ``position_error_m``, ``outage_mse``,
+        ``outage_position_error_m``, ``bias_rms_<tau>s``, ``runtime_s`` (fit only),
+        ``n_terms``, ``stable``, ``data`` (raw or the denoiser).
+    config : StudyConfig
+    split : Split
+    warnings : list of str
+        What deserves the reader's attention (e.g. unstable fitted models).
+    """
+
+    rows: pd.DataFrame
+    config: StudyConfig
+    split: Split
+    warnings: list[str] = field(default_factory=list)
+
+    def best(self) -> pd.DataFrame:
+        """Per protocol and method (FOS per degree), the row with the lowest evaluation MSE."""
+        idx = self.rows.groupby(["protocol", "method", "degree"], sort=False)["evaluate_mse"]
+        return self.rows.loc[idx.idxmin()].reset_index(drop=True)
+
+    def to_json_dict(self) -> dict:
+        """Rows and best rows with the keys of ``fosmodel study --json``."""
+        def records(frame):
+            out = []
+            for rec in frame.to_dict(orient="records"):
+                rec = {k: _json_value(v) for k, v in rec.items()}
+                rec["bias_rms"] = {f"{t:g}": rec.pop(f"bias_rms_{t:g}s") for t in self.config.taus}
+                out.append(rec)
+            return out
+
+        cfg = asdict(self.config)
+        return {"config": cfg,
+                "split_samples": {k: [s.start, s.stop] for k, s in asdict(self.split).items()},
+                "rows": records(self.rows), "best": records(self.best()),
+                "warnings": list(self.warnings)}
+
+
+def _json_value(v: object) -> object:
+    """Python scalars for JSON; NaN (e.g. an unstable model's outage error) becomes null."""
+    if isinstance(v, (np.floating, float)):
+        return float(v) if np.isfinite(v) else None
+    return v.item() if isinstance(v, np.generic) else v
+
+
+def run_study(y: object, config: StudyConfig, *, progress: bool = False) -> StudyResult:
+    """Fit, select and score every configuration of ``config`` on the record ``y``.
+
+    Parameters
+    ----------
+    y : array-like
+        The sensor record (the error signal of a static test), in ``config.units``.
+    config : StudyConfig
+    progress : bool
+        Show a progress bar on stderr.
+
+    Returns
+    -------
+    StudyResult
+    """
+    y = as_signal(y, "the record")
+    horizon, tau = round(config.horizon_s * config.rate), max(config.taus)
+    split = Split.by_duration(
+        len(y), config.rate, config.train_s, config.evaluate_s,
+        min_predict=max(horizon + 1, 2 * round(tau * config.rate)),
+        why=f" (a {config.horizon_s:g} s outage horizon and two {tau:g} s bias windows)")
+    configs = config.configurations()
+    data: dict[str | None, tuple[np.ndarray, np.ndarray]] = {}
+    scored: dict[tuple, dict] = {}
+    rows, notes = [], []
+    bar = tqdm(total=len(configs) * len(config.protocols), disable=not progress,
+               file=sys.stderr, desc="study", unit="fit")
+    for protocol in config.protocols:
+        for method, order, degree in configs:
+            denoiser = config.denoiser(protocol, method)
+            if denoiser not in data:
+                data[denoiser] = _signals(y, split, denoiser, config.rate)
+            key = (method, order, degree, denoiser)
+            if key not in scored:  # FOS sees the same raw data under both protocols
+                scored[key] = _score(method, order, degree, *data[denoiser], split, config, notes)
+            rows.append({"protocol": protocol, "method": method, "label":
+                         method_label(method, degree), "order": order, "degree": degree,
+                         "data": denoiser or "raw", **scored[key]})
+            bar.update()
+    bar.close()
+    return StudyResult(pd.DataFrame(rows), config, split, sorted(set(notes)))
+
+
+def _signals(y, split, denoiser, rate) -> tuple[np.ndarray, np.ndarray]:
+    """(samples to fit on, samples to score against) for one kind of data."""
+    train = y[split.train]
+    if denoiser is None:
+        return train, y
+    return denoise(train, rate, denoiser), denoise(y, rate, denoiser)
+
+
+def _score(method, order, degree, fit_signal, score_signal, split, config, notes) -> dict:
+    model = make_model(method, order, degree, config)
+    t0 = time.perf_counter()
+    model.fit(fit_signal)
+    runtime = time.perf_counter() - t0
+    label = f"{method_label(method, degree)} (L={order})"
+    stable = model.is_stable()
+    if not stable:
+        notes.append(f"{label}: the fitted model is unstable; its free-run metrics are NaN")
+    pred = model.predict(score_signal)
+    residual = (score_signal - pred)[split.predict]
+    mse = one_step_mse(score_signal, pred, split.predict)
+    row = {
+        "evaluate_mse": one_step_mse(score_signal, pred, split.evaluate),
+        "mse": mse,
+        "position_error_m": equivalent_position_error(mse, config.sensor, config.units),
+    }
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnstableModelWarning)  # reported once, above
+        outage = outage_metrics(model, score_signal, config.rate, config.sensor, config.units,
+                                split.predict, horizon_s=config.horizon_s,
+                                n_starts=config.n_starts, taus=config.taus, residual=residual)
+    row["outage_mse"] = outage["outage_mse"] if stable else np.nan
+    row["outage_position_error_m"] = outage["outage_position_error_m"] if stable else np.nan
+    row.update({f"bias_rms_{t:g}s": outage["bias_rms"][t] for t in config.taus})
+    row.update(runtime_s=runtime, n_terms=int(model.n_terms_), stable=stable)
+    return row

@@ -1,0 +1,46 @@
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+from fosmodel.harness import StudyConfig, run_study
+from fosmodel.report import paper_table, study_table, write_study
+
+
+@pytest.fixture(scope="module")
+def result():
+    e = np.random.default_rng(0).standard_normal(13000)
+    y = lfilter([1.0], [1.0, -0.8, 0.3], e)[1000:] * 0.01
+    config = StudyConfig(rate=10.0, sensor="gyro", units="deg/s", orders=(1, 2, 10),
+                         degrees=(1, 2), train_s=300.0, evaluate_s=300.0, n_starts=5)
+    return run_study(y, config)
+
+
+def test_paper_table_layout(result):
+    table = paper_table(result)
+    assert list(table["Order L"].unique()) == [1, 10]
+    first = table[table["Order L"] == 1]
+    assert list(first["Method"]) == ["Yule-Walker", "Yule-Walker", "Covariance", "Covariance",
+                                     "Burg", "Burg", "Gauss-Markov", "Gauss-Markov",
+                                     "FOS CP=1", "FOS CP=2"]
+    assert "Gauss-Markov" not in set(table[table["Order L"] == 10]["Method"])
+    assert set(first["Data"]) == {"raw", "wavelet"}
+    assert "MSE (deg/s)^2" in table.columns and "Position error (m)" in table.columns
+
+
+def test_study_table_has_every_row(result):
+    assert len(study_table(result)) == len(result.rows) == 2 * (3 * 2 + 3 * 3 + 1)
+
+
+def test_write_study_writes_tables_figures_and_report(result, tmp_path):
+    paths = write_study(result, tmp_path / "out", "Test study")
+    names = {p.name for p in paths}
+    for stem in ("comparison", "study", "best"):
+        assert {f"{stem}.md", f"{stem}.csv", f"{stem}.tex"} <= names
+    assert {"order_paper.png", "order_paper.svg", "order_fair.png", "order_fair.svg",
+            "report.md"} <= names
+    assert all(p.stat().st_size > 0 for p in paths)
+    assert (tmp_path / "out" / "order_fair.png").read_bytes()[:4] == b"\x89PNG"
+    assert "\\begin{tabular}" in (tmp_path / "out" / "comparison.tex").read_text()
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "# Test study" in report and "![fair protocol](order_fair.png)" in report
+    assert not [p for p in (tmp_path / "out").iterdir() if p.name.endswith(".tmp")]
