@@ -2,26 +2,44 @@
 
 This is the one place where files are read and checked.  Every problem is an
 :class:`~fosmodel.exceptions.InputError` naming the file, the column and the
-first offending row (CSV rows are counted as file lines, the header being
-line 1).
+first offending row (CSV rows are counted as file lines, the first line being
+line 1); everything worth knowing that is not an error goes to
+:attr:`Record.notes`.
 
 Formats
 -------
 CSV
-    One header row of column names, comma-separated, then one row per
-    sample.  An optional time column (``time``, ``time_s`` or ``t_s``, in
-    seconds) gives the sample rate; otherwise pass ``rate``.
+    Optional ``key,value`` preamble lines (``Fs,100`` gives the sample rate),
+    one header row of column names, comma-separated, then one row per sample;
+    gzip, bz2 or xz compressed when the name ends so.  An optional time column
+    (``time``, ``time_s`` or ``t_s``, in seconds) gives the sample rate;
+    otherwise pass ``rate``.
 ``.npy``
     A structured array (its field names are the columns), a 1-D array (one
     column ``c0``) or a 2-D array (columns ``c0``, ``c1``, ...).
 Parquet
     Read with pandas when pyarrow is installed.
+
+Checks and repairs
+------------------
+Raw integer counts are scaled per column (``scale``); a time column that is a
+host's bursty receive time is detected and, on request, replaced by uniform
+sample times (``uniform``); outliers are found per column and kept, clipped or
+dropped (``outliers``).
 """
 
 from __future__ import annotations
 
+import bz2
+import csv
+import gzip
+import itertools
+import lzma
+import re
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -30,7 +48,17 @@ from .exceptions import InputError
 from .validation import did_you_mean
 
 TIME_COLUMNS = ("time", "time_s", "t_s")
+OUTLIER_MODES = ("keep", "clip", "drop")
+#: An outlier is farther than ``OUTLIER_K`` robust standard deviations from the column median.
+OUTLIER_K = 10.0
+_MAD_TO_SIGMA = 1.4826
 _RATE_TOLERANCE = 0.01
+_PREAMBLE_MAX_LINES = 50
+_RATE_KEYS = frozenset({"fs", "rate", "samplerate", "samplingrate", "samplefrequency",
+                        "samplingfrequency", "outputdatarate", "odr"})
+_BURSTY_MIN_SAMPLES = 100
+_SHOWN = 5  # positions listed in a note
+_OPENERS = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
 
 
 @dataclass
@@ -42,11 +70,18 @@ class Record:
     source : str
         File it came from.
     data : dict of str to ndarray
-        Numeric columns in file order (the time column excluded).
+        Numeric columns in file order (the time column excluded), scaled as asked.
     rate : float or None
         Sample rate in Hz (None when the file has no time and none was given).
     time : ndarray or None
-        Time column in seconds, if the file had one.
+        Time column in seconds, if the file had one (sample number / rate with
+        ``uniform=True``).
+    notes : list of str
+        What the loader found and did that deserves the user's attention.
+    metadata : dict of str to str
+        Preamble entries other than the sample rate, e.g. ``{"Logging Type": "1"}``.
+    outliers : dict of str to ndarray
+        For each column with outliers, their sample indices in the file (before any drop).
     """
 
     source: str
@@ -54,6 +89,8 @@ class Record:
     rate: float | None
     time: np.ndarray | None = None
     notes: list[str] = field(default_factory=list)
+    metadata: dict[str, str] = field(default_factory=dict)
+    outliers: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def n_samples(self) -> int:
@@ -78,16 +115,47 @@ class Record:
         return self.rate
 
 
-def load_record(path: str | Path, *, rate: float | None = None) -> Record:
+class _Preamble(NamedTuple):
+    header_index: int  # 0-based line of the header
+    entries: list[tuple[int, str, str]]  # (file line, key, value)
+
+
+class _Outliers(NamedTuple):
+    index: np.ndarray
+    low: float
+    high: float
+
+
+def load_record(
+    path: str | Path,
+    *,
+    rate: float | None = None,
+    scale: Mapping[str, float] | None = None,
+    uniform: bool = False,
+    outliers: str = "keep",
+) -> Record:
     """Read and validate a record.
 
     Parameters
     ----------
     path : str or Path
-        CSV (optionally gzip-compressed), ``.npy`` or ``.parquet`` file.
+        CSV (optionally compressed), ``.npy`` or ``.parquet`` file.
     rate : float, optional
-        Sample rate in Hz.  Required when the file has no time column; checked
-        against the time column when it has one.
+        Sample rate in Hz.  Required when the file has neither a time column
+        nor a preamble rate; checked against them when it has.
+    scale : mapping of str to float, optional
+        Factor per column, e.g. ``{"gx": 1 / 131}`` to turn raw counts into
+        deg/s (the time column may be scaled too, e.g. from ms to s).
+    uniform : bool, default False
+        Take the samples as uniformly spaced at the time column's effective
+        rate (N - 1 intervals over its span), as a host's bursty receive time
+        needs; the time gap check is then skipped and ``Record.time`` becomes
+        sample number / rate.
+    outliers : {"keep", "clip", "drop"}, default "keep"
+        What to do with samples farther than ``OUTLIER_K`` robust standard
+        deviations (1.4826 MAD) from their column's median: report them only,
+        clip them to that bound, or drop their rows (only from a record with a
+        time column).  They are reported in ``Record.notes`` and ``Record.outliers``.
 
     Returns
     -------
@@ -97,42 +165,138 @@ def load_record(path: str | Path, *, rate: float | None = None) -> Record:
     ------
     InputError
         Missing or empty file, no data rows, a non-numeric or non-finite cell,
-        a time column that is not strictly increasing or not uniform, or a
-        rate that disagrees with it.
+        a bad preamble rate or scale, a time column that is not strictly
+        increasing or not uniform (a bursty one without ``uniform``), a rate
+        that disagrees with it, or a drop of samples from a record without time.
     """
     path = Path(path)
     src = str(path)
     if rate is not None and not (np.isfinite(rate) and rate > 0):
         raise InputError(f"the sample rate must be a positive number of Hz, got {rate!r}")
-    if not path.is_file():
-        raise InputError(f"{src}: no such file")
-    if path.stat().st_size == 0:
-        raise InputError(f"{src}: the file is empty")
-    suffix = "".join(path.suffixes[-2:]).lower()
-    if suffix.endswith(".npy"):
-        frame, first_line = _read_npy(path), 0
-    elif suffix.endswith(".parquet"):
-        frame, first_line = _read_parquet(path), 0
-    else:
-        frame, first_line = _read_csv(path), 2
+    if outliers not in OUTLIER_MODES:
+        raise InputError(f"outliers must be one of {', '.join(OUTLIER_MODES)}, got {outliers!r}")
+    frame, first_line, preamble = _read(path)
     if frame.shape[1] == 0:
         raise InputError(f"{src}: no columns")
     if len(frame) == 0:
         raise InputError(f"{src}: header only, no data rows")
     data = {str(c): _numeric(frame[c], src, str(c), first_line) for c in frame.columns}
+    notes: list[str] = []
+    rate, given_by, metadata = _preamble_rate(preamble, rate, src, notes)
+    _apply_scale(data, scale or {}, src, notes)
     time_name = next((c for c in TIME_COLUMNS if c in data), None)
     time = data.pop(time_name) if time_name else None
     if not data:
         raise InputError(f"{src}: only a time column, no data columns")
-    notes: list[str] = []
+    _note_integer_columns(data, scale or {}, notes)
     if time is not None:
-        rate = _rate_from_time(time, rate, src, time_name, first_line, notes)
-    return Record(src, data, float(rate) if rate is not None else None, time, notes)
+        rate, time = _time_base(time, rate, given_by, uniform, src, time_name, first_line, notes)
+    elif uniform:
+        notes.append("--uniform has no effect: the record has no time column")
+    found = _find_outliers(data)
+    record = Record(src, data, float(rate) if rate is not None else None, time, notes, metadata,
+                    {name: out.index for name, out in found.items()})
+    _handle_outliers(record, found, outliers, first_line)
+    return record
 
 
-def _read_csv(path: Path) -> pd.DataFrame:
+def parse_scales(texts: Iterable[str]) -> dict[str, float]:
+    """Scale factors from ``NAME=FLOAT`` or ``NAME=A/B`` texts (the ``--scale`` option).
+
+    Examples
+    --------
+    >>> parse_scales(["gx=1/131", "ax=0.5"])
+    {'gx': 0.007633587786259542, 'ax': 0.5}
+
+    Raises
+    ------
+    InputError
+        A text of another form, a factor that is zero or not finite, a name given twice.
+    """
+    scales: dict[str, float] = {}
+    for text in texts:
+        name, sep, value = (part.strip() for part in text.partition("="))
+        factor = _factor(value) if sep and name else None
+        if factor is None:
+            raise InputError(f"--scale {text!r}: expected NAME=FACTOR or NAME=A/B with a finite, "
+                             "non-zero factor (e.g. gx=1/131)")
+        if name in scales:
+            raise InputError(f"--scale: column {name!r} is given twice")
+        scales[name] = factor
+    return scales
+
+
+def _factor(text: str) -> float | None:
+    num, sep, den = text.partition("/")
     try:
-        frame = pd.read_csv(path, sep=",", skipinitialspace=True, low_memory=False)
+        value = float(num) / float(den) if sep else float(num)
+    except (ValueError, ZeroDivisionError):
+        return None
+    return value if np.isfinite(value) and value != 0 else None
+
+
+def _read(path: Path) -> tuple[pd.DataFrame, int, _Preamble]:
+    """The raw frame, the file line of its first row (0 if rows, not lines) and the preamble."""
+    if not path.is_file():
+        raise InputError(f"{path}: no such file")
+    if path.stat().st_size == 0:
+        raise InputError(f"{path}: the file is empty")
+    suffix = "".join(path.suffixes[-2:]).lower()
+    if suffix.endswith(".npy"):
+        return _read_npy(path), 0, _Preamble(0, [])
+    if suffix.endswith(".parquet"):
+        return _read_parquet(path), 0, _Preamble(0, [])
+    preamble = _find_preamble(path)
+    return _read_csv(path, preamble.header_index), preamble.header_index + 2, preamble
+
+
+def _find_preamble(path: Path) -> _Preamble:
+    """Locate the header: the first all-names line followed by a numeric row of as many fields.
+
+    The lines before it are a preamble when each is a ``key,value`` pair with a
+    non-numeric key (blank lines allowed).  Otherwise (a units row under a
+    header of three or more columns, say), or when no such header is found, the
+    header is the first line and the usual checks report what is wrong.
+    """
+    rows = list(csv.reader(_head_lines(path, _PREAMBLE_MAX_LINES + 1), skipinitialspace=True))
+    header = next((i for i in range(len(rows) - 1)
+                   if _is_names(rows[i]) and _is_numbers(rows[i + 1], len(rows[i]))), 0)
+    before = rows[:header]
+    if any(row and (len(row) != 2 or not _is_names(row[:1])) for row in before):
+        return _Preamble(0, [])
+    return _Preamble(header, [(n + 1, r[0].strip(), r[1].strip()) for n, r in enumerate(before)
+                              if r])
+
+
+def _head_lines(path: Path, n: int) -> list[str]:
+    opener = _OPENERS.get(path.suffix.lower(), open)
+    try:
+        with opener(path, "rt", errors="replace", newline="") as fh:
+            return list(itertools.islice(fh, n))
+    except (OSError, EOFError, lzma.LZMAError):  # a damaged file: pandas says what is wrong
+        return []
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def _is_names(row: list[str]) -> bool:
+    return bool(row) and all(c.strip() and not _is_number(c) for c in row)
+
+
+def _is_numbers(row: list[str], width: int) -> bool:
+    return len(row) == width and all(_is_number(c) for c in row)
+
+
+def _read_csv(path: Path, skip: int) -> pd.DataFrame:
+    try:
+        frame = pd.read_csv(path, sep=",", skipinitialspace=True, low_memory=False,
+                            skiprows=skip)
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: the file is empty") from None
     except (pd.errors.ParserError, UnicodeDecodeError) as exc:
@@ -182,16 +346,20 @@ def _first_line(exc: BaseException) -> str:
     return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
 
 
+def _where(i: int, first_line: int) -> str:
+    """Sample ``i`` as a file line (CSV) or a row number (``.npy``, Parquet)."""
+    return f"line {i + first_line}" if first_line else f"row {i}"
+
+
 def _numeric(col: pd.Series, src: str, name: str, first_line: int) -> np.ndarray:
     """The column as finite float64, or an error naming the first bad row."""
-    where = "line" if first_line else "row"
     if not (pd.api.types.is_numeric_dtype(col) and not pd.api.types.is_bool_dtype(col)):
         values = pd.to_numeric(col, errors="coerce")
         bad = np.flatnonzero(values.isna().to_numpy() & col.notna().to_numpy())
         if bad.size:
             i = int(bad[0])
             raise InputError(
-                f"{src}: column {name!r}, {where} {i + first_line}: "
+                f"{src}: column {name!r}, {_where(i, first_line)}: "
                 f"{str(col.iloc[i])!r} is not a number"
             )
         col = values
@@ -201,36 +369,197 @@ def _numeric(col: pd.Series, src: str, name: str, first_line: int) -> np.ndarray
         i = int(bad[0])
         kind = "an empty cell" if np.isnan(arr[i]) else "an infinite value"
         raise InputError(
-            f"{src}: column {name!r}, {where} {i + first_line}: {kind} or NaN "
+            f"{src}: column {name!r}, {_where(i, first_line)}: {kind} or NaN "
             f"({bad.size} such cell(s) in the column)"
         )
     return arr
 
 
-def _rate_from_time(time, rate, src, name, first_line, notes) -> float:
-    where = "line" if first_line else "row"
+def _preamble_rate(
+    preamble: _Preamble, rate: float | None, src: str, notes: list[str]
+) -> tuple[float | None, str, dict[str, str]]:
+    """The rate (given, else from the preamble), what gave it, and the other preamble entries."""
+    given_by = f"--rate {rate:g} Hz" if rate is not None else ""
+    keys = [re.sub(r"[^a-z]", "", key.lower()).removesuffix("hz") for _, key, _ in
+            preamble.entries]
+    at = next((i for i, key in enumerate(keys) if key in _RATE_KEYS), None)
+    metadata = {key: value for i, (_, key, value) in enumerate(preamble.entries) if i != at}
+    if not preamble.entries:
+        return rate, given_by, metadata
+    said = f"preamble on lines 1-{preamble.header_index} before the header"
+    if at is not None:
+        line, key, value = preamble.entries[at]
+        found = _factor(value)
+        if found is None or found < 0:
+            raise InputError(f"{src}: line {line}: the preamble sample rate {key},{value} is not "
+                             "a positive number of Hz")
+        here = f"the preamble's {key},{value} (line {line})"
+        if rate is not None and abs(found - rate) > _RATE_TOLERANCE * rate:
+            raise InputError(f"{src}: {given_by} disagrees with {here}")
+        said += f": sample rate {found:g} Hz from line {line} ({key},{value})"
+        rate, given_by = (rate, given_by) if rate is not None else (found, here)
+    if metadata:
+        said += "; kept in metadata: " + ", ".join(f"{k}={v}" for k, v in metadata.items())
+    notes.append(said)
+    return rate, given_by, metadata
+
+
+def _apply_scale(data: dict[str, np.ndarray], scale: Mapping[str, float], src: str,
+                 notes: list[str]) -> None:
+    for name, factor in scale.items():
+        if name not in data:
+            raise InputError(f"{src}: --scale names no column {name!r}"
+                             f"{did_you_mean(name, data)}; columns: {', '.join(data)}")
+        if not (np.isfinite(factor) and factor != 0):
+            raise InputError(f"{src}: --scale {name}={factor!r}: the factor must be finite and "
+                             "non-zero")
+        data[name] = data[name] * factor
+    if scale:
+        notes.append("scaled " + ", ".join(f"{n} by {f:.6g}" for n, f in scale.items()))
+
+
+def _note_integer_columns(data: dict[str, np.ndarray], scale: Mapping[str, float],
+                          notes: list[str]) -> None:
+    integer = [n for n, x in data.items() if n not in scale and np.array_equal(x, np.rint(x))]
+    if integer:
+        notes.append(f"column(s) {', '.join(integer)} hold only integers: if they are raw "
+                     f"counts, scale them, e.g. --scale {integer[0]}=1/16384 for 16384 counts "
+                     "per unit")
+
+
+def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool, src: str,
+               name: str, first_line: int, notes: list[str]) -> tuple[float, np.ndarray]:
+    """The rate and time of a record with a time column, after checking the column."""
     if len(time) < 2:
         if rate is None:
             raise InputError(f"{src}: a single sample cannot give a rate; pass --rate")
-        return rate
+        return rate, time
     dt = np.diff(time)
-    bad = np.flatnonzero(dt <= 0)
+    bursty = _is_bursty(time, dt)
+    _check_order(time, dt, src, name, first_line, repeats_allowed=bursty)
+    if not (bursty or uniform):
+        _check_gaps(dt, src, name, first_line)
+    measured = (len(time) - 1) / (time[-1] - time[0])  # uniform: the span is the best estimate
+    kind = "the effective rate of the bursty time column" if bursty else "the time column"
+    if rate is not None and abs(measured - rate) > _RATE_TOLERANCE * rate:
+        raise InputError(f"{src}: {given_by} disagrees with {kind} ({measured:.6g} Hz)")
+    rate = rate if rate is not None else measured
+    if bursty:
+        n = len(time)
+        lines = f"lines {first_line}-{first_line + n - 1}" if first_line else f"rows 0-{n - 1}"
+        said = (f"column {name!r} ({lines}) looks like a host's bursty receive time (median "
+                f"interval {np.median(dt):.3g} s, mean {np.mean(dt):.3g} s); effective rate "
+                f"{measured:.6g} Hz ((N - 1) / span)")
+        if not (uniform or given_by):
+            raise InputError(f"{src}: {said}: pass --uniform to take the samples as uniformly "
+                             "spaced at that rate, or --rate HZ")
+        notes.append(f"{said}: samples taken as uniformly spaced at {rate:.6g} Hz; time is "
+                     "sample number / rate")
+    elif uniform:
+        gaps = int(np.count_nonzero(dt > 1.5 * np.median(dt)))
+        notes.append(f"--uniform: samples taken as uniformly spaced at {rate:.6g} Hz, the rate of "
+                     f"column {name!r} ({gaps} gap(s) in it ignored); time is sample number / rate")
+    if bursty or uniform:
+        time = np.arange(len(time)) / rate
+    return rate, time
+
+
+def _is_bursty(time: np.ndarray, dt: np.ndarray) -> bool:
+    """A host's receive time: most intervals far below the mean one, yet a steady overall rate.
+
+    Bursty when the record has at least ``_BURSTY_MIN_SAMPLES`` samples, the
+    median interval is under half the mean interval (samples arrive in bursts
+    separated by long waits), and every tenth of the time span holds within
+    25 % of a tenth of the samples (unlike a record with a long gap).
+    """
+    if len(time) < _BURSTY_MIN_SAMPLES or not time[-1] > time[0] or np.any(dt < 0):
+        return False
+    if np.median(dt) >= 0.5 * np.mean(dt):
+        return False
+    counts = np.histogram(time, bins=10)[0]
+    return bool(np.all(np.abs(counts - len(time) / 10) <= 0.25 * len(time) / 10))
+
+
+def _check_order(time, dt, src, name, first_line, *, repeats_allowed: bool) -> None:
+    bad = np.flatnonzero(dt < 0 if repeats_allowed else dt <= 0)
     if bad.size:
         i = int(bad[0]) + 1
         kind = "repeats" if dt[bad[0]] == 0 else "goes backwards"
-        raise InputError(f"{src}: column {name!r}, {where} {i + first_line}: time {kind} "
+        raise InputError(f"{src}: column {name!r}, {_where(i, first_line)}: time {kind} "
                          f"({time[i - 1]!r} then {time[i]!r})")
+
+
+def _check_gaps(dt, src, name, first_line) -> None:
     step = float(np.median(dt))
     gaps = np.flatnonzero(dt > 1.5 * step)
     if gaps.size:
         i = int(gaps[0]) + 1
         raise InputError(
-            f"{src}: column {name!r}, {where} {i + first_line}: a gap of {dt[gaps[0]]:.6g} s "
+            f"{src}: column {name!r}, {_where(i, first_line)}: a gap of {dt[gaps[0]]:.6g} s "
             f"where the sample interval is {step:.6g} s ({gaps.size} gap(s) in the record)"
         )
-    measured = (len(time) - 1) / (time[-1] - time[0])  # uniform: the span is the best estimate
-    if rate is not None and abs(measured - rate) > _RATE_TOLERANCE * rate:
-        raise InputError(f"{src}: --rate {rate:g} Hz disagrees with the time column "
-                         f"({measured:.6g} Hz)")
-    notes.append(f"sample rate {measured:.6g} Hz from column {name!r}")
-    return rate if rate is not None else measured
+
+
+def _find_outliers(data: dict[str, np.ndarray]) -> dict[str, _Outliers]:
+    """Samples farther than ``OUTLIER_K`` robust standard deviations from their column's median.
+
+    The robust standard deviation is 1.4826 times the median absolute
+    deviation; when more than half the column sits on its median (MAD = 0, as
+    for a die temperature on 0.09 C steps) it is the column's resolution, the
+    smallest step between its values.  A constant column has no outliers.
+    """
+    found = {}
+    for name, x in data.items():
+        center = float(np.median(x))
+        sigma = _MAD_TO_SIGMA * float(np.median(np.abs(x - center)))
+        if sigma == 0:
+            steps = np.diff(np.unique(x))
+            sigma = float(steps.min()) if steps.size else 0.0
+        index = np.flatnonzero(np.abs(x - center) > OUTLIER_K * sigma)
+        if sigma > 0 and index.size:
+            found[name] = _Outliers(index, center - OUTLIER_K * sigma, center + OUTLIER_K * sigma)
+    return found
+
+
+def _positions(index: np.ndarray, first_line: int) -> str:
+    shown = [int(i) for i in index[:_SHOWN]]
+    more = ", ..." if index.size > _SHOWN else ""
+    text = "sample(s) " + ", ".join(map(str, shown)) + more
+    if first_line:
+        text += " (line(s) " + ", ".join(str(i + first_line) for i in shown) + more + ")"
+    return text
+
+
+def _handle_outliers(record: Record, found: dict[str, _Outliers], mode: str,
+                     first_line: int) -> None:
+    rule = f"|x - median| > {OUTLIER_K:g} x 1.4826 MAD"
+    if not found:
+        if mode != "keep":
+            record.notes.append(f"--outliers {mode}: no outliers found ({rule})")
+        return
+    done = {"keep": "kept (--outliers clip or drop handles them)", "clip": "clipped to",
+            "drop": "dropped"}[mode]
+    for name, out in found.items():
+        bounds = f"[{out.low:.6g}, {out.high:.6g}]"
+        record.notes.append(
+            f"column {name!r}: {out.index.size} outlier(s) ({rule}, outside {bounds}) at "
+            f"{_positions(out.index, first_line)}; {done}{' ' + bounds if mode == 'clip' else ''}")
+        if mode == "clip":
+            record.data[name] = np.clip(record.data[name], out.low, out.high)
+    if mode == "drop":
+        _drop_rows(record, np.unique(np.concatenate([o.index for o in found.values()])))
+
+
+def _drop_rows(record: Record, rows: np.ndarray) -> None:
+    if record.time is None:
+        raise InputError(
+            f"{record.source}: --outliers drop would remove {rows.size} sample(s) from a record "
+            "without a time column, which breaks the uniform sample spacing the models assume; "
+            "use --outliers clip (or keep)")
+    keep = np.ones(record.n_samples, dtype=bool)
+    keep[rows] = False
+    record.data = {name: x[keep] for name, x in record.data.items()}
+    record.time = record.time[keep]
+    record.notes.append(
+        f"dropped {rows.size} row(s) with an outlier in any column: the record is no longer "
+        "uniformly spaced; its time column keeps the gaps")

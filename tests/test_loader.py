@@ -3,9 +3,10 @@ import gzip
 import numpy as np
 import pandas as pd
 import pytest
+from records import bursty_csv, spiky_csv
 
 from fosmodel.exceptions import InputError
-from fosmodel.loader import load_record
+from fosmodel.loader import load_record, parse_scales
 
 
 def _csv(tmp_path, text, name="rec.csv"):
@@ -111,3 +112,220 @@ def test_damaged_binary_files(tmp_path):
     (tmp_path / "x.parquet").write_bytes(b"PAR1 damaged")
     with pytest.raises(InputError, match="not a readable Parquet"):
         load_record(tmp_path / "x.parquet")
+
+
+# --- preamble lines before the header ---------------------------------------------------------
+
+
+def test_preamble_gives_rate_and_metadata(tmp_path):
+    p = _csv(tmp_path, "Fs,100\nLogging Type,1\n\nWaiting time,-1\nax,gx\n1,2\n3,4\n")
+    rec = load_record(p)
+    assert rec.rate == 100.0 and rec.names == ["ax", "gx"] and rec.n_samples == 2
+    assert rec.metadata == {"Logging Type": "1", "Waiting time": "-1"}
+    assert any("preamble on lines 1-4" in n and "100 Hz from line 1 (Fs,100)" in n
+               and "Logging Type=1, Waiting time=-1" in n for n in rec.notes)
+    assert load_record(p, rate=100.5).rate == 100.5  # within 1 %: the given rate is kept
+
+
+def test_preamble_keeps_true_line_numbers(tmp_path):
+    p = tmp_path / "r.csv.gz"
+    with gzip.open(p, "wt") as fh:
+        fh.write("Fs,100\nDevice,MPU-6050\nax,gx\n1,2\n3,x\n")
+    with pytest.raises(InputError, match="column 'gx', line 5: 'x' is not a number"):
+        load_record(p)
+
+
+@pytest.mark.parametrize("key", ["fs", "RATE", "sample_rate", "Sampling rate (Hz)", "ODR"])
+def test_preamble_rate_keys(tmp_path, key):
+    assert load_record(_csv(tmp_path, f"{key},200\na\n1\n2\n")).rate == 200.0
+
+
+@pytest.mark.parametrize(
+    "text, rate, message",
+    [
+        ("Fs,100\na\n1\n", 200, r"--rate 200 Hz disagrees with the preamble's Fs,100 \(line 1\)"),
+        ("Fs,abc\na\n1\n", None, "line 1: the preamble sample rate Fs,abc is not a positive"),
+        ("Fs,-5\na\n1\n", None, "line 1: the preamble sample rate Fs,-5 is not a positive"),
+        ("Fs,50\ntime,a\n0,1\n0.01,2\n0.02,3\n", None,
+         r"the preamble's Fs,50 \(line 1\) disagrees with the time column \(100 Hz\)"),
+    ],
+)
+def test_preamble_rate_errors(tmp_path, text, rate, message):
+    p = _csv(tmp_path, text)
+    with pytest.raises(InputError, match=message) as err:
+        load_record(p, rate=rate)
+    assert str(p) in str(err.value)
+
+
+def test_units_row_is_not_a_preamble(tmp_path):
+    with pytest.raises(InputError, match="column 'gx', line 2: 'deg/s' is not a number"):
+        load_record(_csv(tmp_path, "gx,ax,temp\ndeg/s,g,C\n1,2,3\n"))
+
+
+# --- scales and raw integer counts -----------------------------------------------------------
+
+
+def test_parse_scales():
+    assert parse_scales(["gx=1/131", " ax = 0.5 ", "t=-2e-3"]) == {"gx": 1 / 131, "ax": 0.5,
+                                                                  "t": -2e-3}
+    with pytest.raises(InputError, match="column 'gx' is given twice"):
+        parse_scales(["gx=1", "gx=2"])
+
+
+@pytest.mark.parametrize("text", ["gx", "gx=", "=2", "gx=abc", "gx=1/0", "gx=0", "gx=inf",
+                                  "gx=1/2/3"])
+def test_parse_scales_rejects(text):
+    with pytest.raises(InputError, match="expected NAME=FACTOR or NAME=A/B"):
+        parse_scales([text])
+
+
+def test_scale_turns_counts_into_units(tmp_path):
+    p = _csv(tmp_path, "ax,gx,n\n16384,131,1\n-8192,262,2\n")
+    rec = load_record(p, scale={"ax": 1 / 16384, "gx": 1 / 131})
+    np.testing.assert_allclose(rec.column("ax"), [1.0, -0.5])
+    np.testing.assert_allclose(rec.column("gx"), [1.0, 2.0])
+    assert rec.column("ax").dtype == float
+    assert any(n.startswith("scaled ax by 6.10352e-05, gx by 0.00763359") for n in rec.notes)
+    hint = [n for n in rec.notes if "hold only integers" in n]
+    assert len(hint) == 1 and hint[0].startswith("column(s) n hold only integers")
+    unscaled = load_record(p)
+    assert any(n.startswith("column(s) ax, gx, n hold only integers") for n in unscaled.notes)
+
+
+def test_scale_of_an_unknown_column(tmp_path):
+    p = _csv(tmp_path, "gx,gy\n1,2\n")
+    with pytest.raises(InputError, match=r"--scale names no column 'g_x' \(did you mean 'gx'\?\); "
+                                         "columns: gx, gy"):
+        load_record(p, scale={"g_x": 0.5})
+
+
+def test_no_integer_hint_for_float_columns(tmp_path):
+    rec = load_record(_csv(tmp_path, "a\n0.5\n1.25\n"))
+    assert rec.notes == []
+
+
+# --- host receive time that arrives in bursts -------------------------------------------------
+
+
+def test_bursty_time_is_refused_without_uniform(tmp_path):
+    p, effective = bursty_csv(tmp_path)
+    message = (rf"{p}: column 't_s' \(lines 2-401\) looks like a host's bursty receive time "
+               rf"\(median interval 0.001 s, mean 0.00991 s\); effective rate {effective:.6g} Hz")
+    with pytest.raises(InputError, match=message) as err:
+        load_record(p)
+    assert "pass --uniform" in str(err.value) and "or --rate HZ" in str(err.value)
+
+
+def test_bursty_time_with_uniform_or_rate(tmp_path):
+    p, effective = bursty_csv(tmp_path)
+    rec = load_record(p, uniform=True)
+    assert rec.rate == pytest.approx(effective) and rec.n_samples == 400
+    np.testing.assert_allclose(rec.time, np.arange(400) / effective)
+    assert any("bursty receive time" in n and f"uniformly spaced at {effective:.6g} Hz" in n
+               for n in rec.notes)
+    assert load_record(p, rate=100).rate == 100.0
+    with pytest.raises(InputError, match="--rate 200 Hz disagrees with the effective rate of the "
+                                         "bursty time column"):
+        load_record(p, rate=200)
+
+
+def test_regular_time_checks_still_hold(tmp_path):
+    rng = np.random.default_rng(4)
+    t = np.arange(1000) / 100 + rng.uniform(-1e-3, 1e-3, 1000)  # jittered but regular
+    pd.DataFrame({"time": t, "a": rng.normal(size=1000)}).to_csv(tmp_path / "j.csv", index=False)
+    rec = load_record(tmp_path / "j.csv")
+    assert rec.rate == pytest.approx(100, rel=1e-3) and rec.notes == []
+    np.testing.assert_array_equal(rec.time, t)
+    t[600:] += 20.0  # one long gap: most intervals are far below the mean, but it is no burst
+    pd.DataFrame({"time": t, "a": rng.normal(size=1000)}).to_csv(tmp_path / "g.csv", index=False)
+    with pytest.raises(InputError, match=r"column 'time', line 602: a gap of 20.0\d* s"):
+        load_record(tmp_path / "g.csv")
+    rec = load_record(tmp_path / "g.csv", uniform=True)
+    assert any("(1 gap(s) in it ignored)" in n for n in rec.notes)
+    np.testing.assert_allclose(rec.time, np.arange(1000) / rec.rate)
+
+
+def test_uniform_without_time_is_noted(tmp_path):
+    rec = load_record(_csv(tmp_path, "a\n0.5\n1.5\n"), rate=10, uniform=True)
+    assert rec.notes == ["--uniform has no effect: the record has no time column"]
+
+
+# --- outliers --------------------------------------------------------------------------------
+
+
+def _bounds(x):
+    center = np.median(x)
+    sigma = 1.4826 * np.median(np.abs(x - center))
+    return center - 10 * sigma, center + 10 * sigma
+
+
+def test_outliers_are_reported_and_kept(tmp_path):
+    p, a, b = spiky_csv(tmp_path, with_time=False)
+    rec = load_record(p)
+    assert set(rec.outliers) == {"a", "b"}
+    np.testing.assert_array_equal(rec.outliers["a"], [100, 700])
+    np.testing.assert_array_equal(rec.outliers["b"], [700])
+    np.testing.assert_array_equal(rec.column("a"), a)
+    note = next(n for n in rec.notes if n.startswith("column 'a'"))
+    assert "2 outlier(s) (|x - median| > 10 x 1.4826 MAD" in note
+    assert "at sample(s) 100, 700 (line(s) 102, 702); kept" in note
+
+
+def test_outliers_clipped_to_the_bound(tmp_path):
+    p, a, _ = spiky_csv(tmp_path, with_time=False)
+    rec = load_record(p, outliers="clip")
+    low, high = _bounds(a)
+    expected = a.copy()
+    expected[100], expected[700] = high, low
+    np.testing.assert_allclose(rec.column("a"), expected)
+    assert any("clipped to [" in n for n in rec.notes)
+
+
+def test_outliers_dropped_keep_the_time_gap(tmp_path):
+    p, a, b = spiky_csv(tmp_path, with_time=True)
+    rec = load_record(p, outliers="drop")
+    keep = np.setdiff1d(np.arange(1000), [100, 700])
+    assert rec.n_samples == 998 and rec.rate == pytest.approx(100)
+    np.testing.assert_array_equal(rec.column("a"), a[keep])
+    np.testing.assert_array_equal(rec.column("b"), b[keep])
+    np.testing.assert_allclose(rec.time, keep / 100)
+    np.testing.assert_array_equal(rec.outliers["a"], [100, 700])  # positions in the file
+    assert any(n.startswith("dropped 2 row(s)") and "no longer uniformly spaced" in n
+               for n in rec.notes)
+
+
+def test_dropping_without_time_is_refused(tmp_path):
+    p, _, _ = spiky_csv(tmp_path, with_time=False)
+    with pytest.raises(InputError, match=f"{p}: --outliers drop would remove 2 sample"
+                                         r"\(s\) from a record without a time column, which "
+                                         "breaks the uniform sample spacing.*use --outliers clip"):
+        load_record(p, outliers="drop")
+    clean = load_record(_csv(tmp_path, "a\n0.5\n1.5\n0.7\n"), outliers="drop")
+    assert clean.notes == ["--outliers drop: no outliers found (|x - median| > 10 x 1.4826 MAD)"]
+    with pytest.raises(InputError, match="outliers must be one of keep, clip, drop"):
+        load_record(p, outliers="remove")
+
+
+def test_outliers_of_a_column_on_few_levels(tmp_path):
+    temp = np.full(200, 25.0)
+    temp[::3], temp[1::7] = 25.1, 24.9  # MAD 0: the resolution 0.1 C is the scale
+    rec = load_record(_write(tmp_path, {"temp": temp, "const": np.ones(200)}))
+    assert rec.outliers == {}
+    temp[50] = 27.0
+    rec = load_record(_write(tmp_path, {"temp": temp, "const": np.ones(200)}))
+    assert set(rec.outliers) == {"temp"} and rec.outliers["temp"].tolist() == [50]
+
+
+def test_no_outliers_in_clean_gaussian_noise(tmp_path):
+    rng = np.random.default_rng(6)
+    rec = load_record(_write(tmp_path, {"a": rng.normal(size=200_000)}))
+    assert rec.outliers == {} and rec.notes == []
+
+
+def _write(tmp_path, columns):
+    path = tmp_path / "w.csv"
+    pd.DataFrame(columns).to_csv(path, index=False)
+    return path
+
+
+# --- the loader options on the command line ---------------------------------------------------
