@@ -424,10 +424,11 @@ def _undeclared_aux_lag():
     "undeclared_step",
     LOOP_DURATION,
     LOOP_RATE,
-    "Base noise plus an undeclared 0.15 deg/s bias step at 55 % of the record (or at step_time_s)",
+    "Base noise plus an undeclared 0.15 deg/s bias step at 35 % of the record (or at step_time_s)",
 )
 def _undeclared_step(duration, step_time_s=None):
-    time_s = 0.55 * duration if step_time_s is None else step_time_s
+    # 35 %: inside the first half, the part of a record a model is fitted on.
+    time_s = 0.35 * duration if step_time_s is None else step_time_s
     return _loop(_base(), BiasStep((time_s,), (0.15,), declared=False, name="bias_step"))
 
 

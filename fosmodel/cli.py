@@ -1,4 +1,4 @@
-"""Command line: ``fosmodel fit | predict | study | synth | demo``.
+"""Command line: ``fosmodel fit | predict | study | close-loop | synth | demo``.
 
 Exit codes: 0 success, 2 bad input or usage (one-line message on stderr),
 1 internal error (with a hint to report it; ``--verbose`` shows the traceback).
@@ -20,7 +20,7 @@ from . import __version__
 from .candidates import count_candidates
 from .exceptions import InputError
 from .fos import STOP_RULES
-from .loader import load_record
+from .loader import OUTLIER_K, OUTLIER_MODES, Record, load_record, parse_scales
 from .model import FOSModel
 from .output import atomic_write, write_text
 
@@ -77,9 +77,30 @@ def _out_path(path: str) -> Path:
     return out
 
 
+def _load(args: argparse.Namespace) -> Record:
+    """The record of ``args.file`` with the loader options; its notes go to stderr."""
+    rec = load_record(args.file, rate=args.rate, scale=parse_scales(args.scale or []),
+                      uniform=args.uniform, outliers=args.outliers)
+    for note in rec.notes:
+        print(f"fosmodel: note: {note}", file=sys.stderr)
+    return rec
+
+
+def _add_loader_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--scale", action="append", metavar="NAME=FACTOR",
+                        help="multiply column NAME by FACTOR, e.g. gx=1/131 for raw counts "
+                             "(repeatable)")
+    parser.add_argument("--uniform", action="store_true",
+                        help="take the samples as uniformly spaced at the time column's "
+                             "effective rate (a host's bursty receive time)")
+    parser.add_argument("--outliers", choices=OUTLIER_MODES, default="keep",
+                        help=f"outliers (|x - median| > {OUTLIER_K:g} x 1.4826 MAD): keep (report, "
+                             "default), clip or drop")
+
+
 def _cmd_fit(args: argparse.Namespace) -> int:
     out = _out_path(args.out)
-    rec = load_record(args.file, rate=args.rate)
+    rec = _load(args)
     y = rec.column(args.column)
     exog_lags = dict(args.exog or [])
     model = FOSModel(max_lag=args.max_lag, degree=args.degree, exog_lags=exog_lags,
@@ -115,7 +136,7 @@ def _read_model(path: str) -> FOSModel:
 def _cmd_predict(args: argparse.Namespace) -> int:
     out = _out_path(args.out)
     model = _read_model(args.model)
-    rec = load_record(args.file, rate=args.rate)
+    rec = _load(args)
     column = args.column or model.meta_.get("column")
     if not column:
         raise InputError("the model does not say which column it models; pass --column")
@@ -139,7 +160,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     from .report import paper_table, write_study
 
     json_path = _out_path(args.json) if args.json else None
-    rec = load_record(args.file, rate=args.rate)
+    rec = _load(args)
     y = rec.column(args.column)
     protocols = ["paper", "fair"] if args.protocol == "both" else [args.protocol]
     config = StudyConfig(
@@ -158,6 +179,40 @@ def _cmd_study(args: argparse.Namespace) -> int:
     if json_path:
         write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
     print(f"study of {len(result.rows)} fits written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else ""))
+    return 0
+
+
+def _fractions(text: str) -> tuple[float, float]:
+    try:
+        train, evaluate = (float(p) for p in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected TRAIN,EVALUATE fractions (e.g. 0.5,0.2), "
+                                         f"got {text!r}") from None
+    return train, evaluate
+
+
+def _cmd_close_loop(args: argparse.Namespace) -> int:
+    from .closeloop import LoopConfig, close_loop
+    from .loop_report import effects_table, write_loop_report
+
+    json_path = _out_path(args.json) if args.json else None
+    rec = _load(args)
+    y = rec.column(args.column)
+    aux = args.aux if args.aux is not None else [c for c in rec.names if c != args.column]
+    channels = {name: rec.column(name) for name in aux}
+    config = LoopConfig(rate=rec.require_rate(), sensor=args.sensor, units=args.units,
+                        max_lag=args.max_lag, train=args.split[0], evaluate=args.split[1])
+    result = close_loop(y, channels, config)
+    out = Path(args.out)
+    write_loop_report(result, out, args.title or f"{args.column} of {Path(args.file).name}")
+    print(effects_table(result).drop(columns=["Evidence"]).to_string(
+        index=False, float_format=lambda v: f"{v:.4g}"))
+    if result.unexplained:
+        print(f"still firing, with no effect that survives: {', '.join(result.unexplained)}")
+    if json_path:
+        write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
+    print(f"residual loop report written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else ""))
     return 0
 
@@ -188,6 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("file", help="CSV, .npy or .parquet record")
     fit.add_argument("--column", required=True, help="column to model")
     fit.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
+    _add_loader_options(fit)
     fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L (default 10)")
     fit.add_argument("--degree", type=int, default=1, help="CP, cross-product degree (default 1)")
     fit.add_argument("--exog", type=_exog_arg, action="append", metavar="NAME:K",
@@ -203,6 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
     pred.add_argument("--model", required=True, help="model file written by 'fosmodel fit'")
     pred.add_argument("--column", help="column to predict (default: the one the model was fit on)")
     pred.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
+    _add_loader_options(pred)
     pred.add_argument("--out", required=True, help="CSV to write")
     pred.set_defaults(func=_cmd_predict)
 
@@ -210,6 +267,7 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("file", help="CSV, .npy or .parquet record")
     study.add_argument("--column", required=True, help="column to model")
     study.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
+    _add_loader_options(study)
     study.add_argument("--sensor", required=True, choices=("accel", "gyro"))
     study.add_argument("--units", required=True,
                        help="units of the column: m/s^2, g, mg (accel); rad/s, deg/s, deg/h (gyro)")
@@ -232,6 +290,24 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("--out", required=True, help="output directory (created)")
     study.add_argument("--json", help="also write every row and the best rows as JSON")
     study.set_defaults(func=_cmd_study)
+
+    loop = sub.add_parser("close-loop", help="find what the model lacks in its residual, "
+                          "add it, report the error before and after")
+    loop.add_argument("file", help="CSV, .npy or .parquet record")
+    loop.add_argument("--column", required=True, help="column to model")
+    loop.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
+    _add_loader_options(loop)
+    loop.add_argument("--aux", nargs="+", metavar="COL",
+                      help="columns that may explain the residual (default: every other column)")
+    loop.add_argument("--sensor", choices=("accel", "gyro"), help="for position errors")
+    loop.add_argument("--units", help="units of the column (with --sensor)")
+    loop.add_argument("--max-lag", type=int, default=10, help="L of the starting model")
+    loop.add_argument("--split", type=_fractions, default=(0.5, 0.2),
+                      help="fractions for fitting and evaluation (default 0.5,0.2)")
+    loop.add_argument("--title", help="title of the report")
+    loop.add_argument("--out", required=True, help="output directory (created)")
+    loop.add_argument("--json", help="also write the before/after metrics and effects as JSON")
+    loop.set_defaults(func=_cmd_close_loop)
 
     from data_synth.cli import configure_parser
 

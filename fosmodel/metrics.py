@@ -300,8 +300,8 @@ def outage_metrics(
     model: FreeRunModel,
     y: object,
     rate: float,
-    sensor: str,
-    units: str,
+    sensor: str | None,
+    units: str | None,
     segment: slice,
     horizon_s: float = 30.0,
     n_starts: int = 20,
@@ -325,8 +325,8 @@ def outage_metrics(
         The record, in ``units``.
     rate : float
         Sampling rate in Hz.
-    sensor, units : str
-        See :func:`to_si_scale`.
+    sensor, units : str or None
+        See :func:`to_si_scale`; with ``sensor`` None the position error is None.
     segment : slice
         The evaluation part of ``y`` (step 1); outages lie entirely inside it.
     horizon_s : float
@@ -354,16 +354,17 @@ def outage_metrics(
     if n_steps < 1:
         raise InputError(f"horizon_s={horizon_s} s is shorter than one sample at {rate} Hz")
     errors = free_run_errors(model, y, outage_starts(start, stop, n_steps, n_starts), n_steps)
-    position = integrated_position_error(errors, rate, sensor, units, g)
+    position = None if sensor is None else integrated_position_error(errors, rate, sensor, units, g)
     if residual is None:
         residual = (y - np.asarray(model.predict(y), dtype=float))[start:stop]
     residual = np.asarray(residual, dtype=float)
     if residual.shape != (stop - start,):
         raise InputError(f"residual has shape {residual.shape}, but the segment "
                          f"[{start}, {stop}) has {stop - start} samples")
+    rms_position = None if position is None else float(np.sqrt(np.mean(position**2)))
     return {
         "outage_mse": float(np.mean(errors**2)),
-        "outage_position_error_m": float(np.sqrt(np.mean(position**2))),
+        "outage_position_error_m": rms_position,
         "bias_rms": {tau: bias_rms(residual, rate, tau) for tau in taus},
     }
 

@@ -486,3 +486,39 @@ class FOSModel(BaseEstimator):
             raise InputError(f"corrupted model file: {type(exc).__name__}: {exc}") from None
         model.meta_ = dict(data.get("meta") or {})
         return model
+
+
+class BoundModel:
+    """A fitted :class:`FOSModel` with the full-length inputs of one record.
+
+    Code that treats every model alike (the harness, the metrics) calls
+    ``predict(y)`` and ``simulate(y_init, n_steps)`` with the output alone; this
+    supplies the exogenous channels and user columns, cut to the same samples
+    (sample ``n`` of ``y`` is sample ``n`` of the record).
+    """
+
+    def __init__(self, model: FOSModel, inputs: Mapping[str, np.ndarray]) -> None:
+        self.model = model
+        self.inputs = {k: np.asarray(v, dtype=float) for k, v in inputs.items()}
+
+    @property
+    def lag_window_(self) -> int:
+        return self.model.lag_window_
+
+    @property
+    def n_terms_(self) -> int:
+        return self.model.n_terms_
+
+    def is_stable(self) -> bool:
+        return self.model.is_stable()
+
+    def _cut(self, n: int) -> dict[str, np.ndarray] | None:
+        return {k: v[:n] for k, v in self.inputs.items()} if self.inputs else None
+
+    def predict(self, y: object) -> np.ndarray:
+        """One-step prediction of ``y``, the first ``len(y)`` samples of the record."""
+        return self.model.predict(y, self._cut(len(y)))
+
+    def simulate(self, y_init: object, n_steps: int, noise: object | None = None) -> np.ndarray:
+        """Free run after ``y_init`` (the record's first samples) for ``n_steps`` samples."""
+        return self.model.simulate(y_init, n_steps, self._cut(len(y_init) + n_steps), noise)

@@ -1,4 +1,4 @@
-"""Replace one generated section of the README, between ``<!-- NAME:begin -->`` and ``<!-- NAME:end -->``."""
+"""Replace one generated section of the README (between ``<!-- NAME:begin/end -->`` markers)."""
 
 from __future__ import annotations
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from records import bursty_csv, spiky_csv
 from scipy.signal import lfilter
 
 from fosmodel import cli
@@ -179,3 +180,66 @@ def test_study_empty_file_exit_2(tmp_path, capsys):
     code, _, err = _run(["study", empty, "--column", "a", "--sensor", "gyro", "--units", "deg/s",
                          "--out", tmp_path / "o"], capsys)
     assert code == 2 and "the file is empty" in err
+
+
+def test_close_loop_finds_an_undeclared_temperature_effect(tmp_path, capsys):
+    rec = tmp_path / "rec.csv"
+    assert cli.main(["synth", "undeclared_temperature", "--seed", "0", "--out", str(rec)]) == 0
+    out, js = tmp_path / "loop", tmp_path / "loop.json"
+    code, stdout, err = _run(["close-loop", rec, "--column", "gyro_x", "--sensor", "gyro",
+                              "--units", "deg/s", "--out", out, "--json", js], capsys)
+    assert code == 0, err
+    assert "aux temp_c" in stdout and "written to" in stdout
+    data = json.loads(js.read_text())
+    assert [e["kind"] for e in data["effects"]] == ["aux"]
+    assert data["effects"][0]["channel"] == "temp_c"
+    assert data["after"]["outage_mse"] < data["before"]["outage_mse"]
+    for name in ("report.md", "effects.csv", "diagnostics.md", "residual.png", "residual.svg"):
+        assert (out / name).exists()
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [(["--units", "deg/s"], "give both the sensor"),
+     (["--split", "0.7,0.4"], "adding up to less than 1"),
+     (["--aux", "temp"], "no column 'temp' (did you mean 'temp_c'?)"),
+     (["--max-lag", "0"], "max_lag must be an integer >= 1")],
+)
+def test_close_loop_bad_input_exit_2(record, tmp_path, capsys, extra, message):
+    args = ["close-loop", record, "--column", "gyro_y", "--out", tmp_path / "o", *extra]
+    code, _, err = _run(args, capsys)
+    assert code == 2 and err.count("\n") == 1 and message in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_close_loop_too_short_exit_2(record, tmp_path, capsys):
+    code, _, err = _run(["close-loop", record, "--column", "gyro_y", "--out", tmp_path / "o"],
+                        capsys)
+    assert code == 2 and "too short for the split" in err
+
+
+def test_cli_bursty_time_needs_uniform_and_prints_notes(tmp_path, capsys):
+    p, effective = bursty_csv(tmp_path)
+    fit = ["fit", p, "--column", "gx", "--max-lag", 2, "--out", tmp_path / "m.json"]
+    code, _, err = _run(fit, capsys)
+    assert code == 2 and err.count("\n") == 1 and "pass --uniform" in err
+    code, _, err = _run([*fit, "--uniform"], capsys)
+    assert code == 0, err
+    assert "fosmodel: note: column 't_s' (lines 2-401) looks like a host's bursty" in err
+    assert json.loads((tmp_path / "m.json").read_text())["meta"]["rate_hz"] == pytest.approx(
+        effective)
+
+
+def test_cli_scale_and_outliers(tmp_path, capsys):
+    p, _, _ = spiky_csv(tmp_path, with_time=False)
+    out = tmp_path / "m.json"
+    code, _, err = _run(["fit", p, "--column", "a", "--scale", "a=1/2", "--scale", "b=0.5",
+                         "--outliers", "clip", "--out", out], capsys)
+    assert code == 0, err
+    assert "fosmodel: note: scaled a by 0.5, b by 0.5\n" in err
+    assert "fosmodel: note: column 'a': 2 outlier(s)" in err and "clipped to" in err
+    for extra, message in ((["--scale", "a=x"], "--scale 'a=x': expected NAME=FACTOR"),
+                           (["--scale", "aa=2"], "no column 'aa' (did you mean 'a'?)"),
+                           (["--outliers", "drop"], "without a time column")):
+        code, _, err = _run(["fit", p, "--column", "a", *extra, "--out", out], capsys)
+        assert code == 2 and err.count("\n") == 1 and message in err

@@ -1,0 +1,173 @@
+"""Report of the residual loop: before/after table, diagnostics, figures, in one Markdown page."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from .closeloop import LoopResult
+from .diagnose import Finding
+from .output import write_text
+from .report import save_figure, write_tables
+from .summary import markdown_table
+
+
+def effects_table(result: LoopResult) -> pd.DataFrame:
+    """Prediction-segment metrics before the loop and after each effect it kept."""
+    taus = list(result.before["bias_rms"])
+    rows = [("before (starting model)", "", "", result.before)]
+    for step in result.steps:
+        rows.append((step.effect.describe(), ", ".join(step.terms_added),
+                     _evidence(step.effect.evidence), step.predict))
+    u = result.config.units or "units"
+    frame = pd.DataFrame([{
+        "Model": name, "Terms added": terms, "Evidence": evidence,
+        f"One-step MSE ({u})^2": m["mse"], "Position error (m)": m["position_error_m"],
+        f"Outage MSE ({u})^2": m["outage_mse"],
+        f"Outage position error (m, {result.config.horizon_s:g} s)": m["outage_position_error_m"],
+        **{f"Bias RMS {t} s ({u})": m["bias_rms"][t] for t in taus},
+    } for name, terms, evidence, m in rows])
+    return frame.dropna(axis=1, how="all")
+
+
+def _evidence(ev: dict) -> str:
+    e = ev.get("evidence", {})
+    detail = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
+                       for k, v in e.items() if k not in ("bic_gain", "range"))
+    return f"{ev.get('test', '')} p={ev.get('p_value', float('nan')):.2g} ({detail})"
+
+
+def findings_table(before: list[Finding], after: list[Finding]) -> pd.DataFrame:
+    """Each test on the first and on the final model: statistic, p-value, fired."""
+    rows = []
+    for b, a in zip(before, after):
+        name = b.test + (f" {b.evidence['channel']}" if b.test == "aux" else "")
+        rows.append({"Test": name, "Statistic before": b.statistic, "p before": b.p_value,
+                     "Fired before": "yes" if b.fired else "no", "Statistic after": a.statistic,
+                     "p after": a.p_value, "Fired after": "yes" if a.fired else "no"})
+    return pd.DataFrame(rows)
+
+
+def residual_figure(result: LoopResult, title: str) -> Figure:
+    """Residual diagnostics of the first (grey) and the final (colour) model."""
+    fig = Figure(figsize=(16, 7.5), layout="constrained")
+    axes = fig.subplots(2, 4).ravel()
+    rate = result.config.rate
+    for findings, color, label in ((result.findings_before, "0.6", "before"),
+                                   (result.findings_after, "C0", "after")):
+        by = {f.test: f for f in findings}
+        acf = by["whiteness"].plot["acf"]
+        axes[0].plot(np.arange(len(acf)) / rate, acf, color=color, label=label)
+        spec = by["periodic"].plot
+        axes[1].semilogy(spec["freqs"], _smooth(spec["spectrum"]), color=color, label=label)
+        al = by["allan"].plot
+        axes[2].loglog(al["taus"], al["adev"], "o-", color=color, ms=3, label=label)
+        aux = [f for f in findings if f.test == "aux"]
+        for k, f in enumerate(aux):
+            axes[3].plot(f.plot["lags"], f.plot["rho"], color=color,
+                         ls=["-", "--", ":", "-."][k % 4], label=f"{label} {f.evidence['channel']}")
+        tr = by["trend"].plot
+        axes[4].plot(*_block_means(tr["time"], result_residual(result, label)), color=color,
+                     label=label)
+        axes[4].plot(tr["time"], tr["fit"], color=color, lw=2)
+        cp = by["step"].plot
+        axes[5].plot(cp["time"], cp["cusum"], color=color, label=label)
+        if "nonlinear" in by:
+            nl = by["nonlinear"].plot
+            axes[6].plot(*_binned(nl["product"], nl["residual"]), "o-", color=color, label=label)
+    white = result.findings_before[-1].plot
+    axes[2].loglog(white["taus"], white["white"], "k:", label="white noise")
+    band = result.findings_before[0].plot["band"]
+    for ax in (axes[0], axes[3]):
+        ax.axhspan(-band, band, color="0.9", zorder=0)
+    titles = ["residual autocorrelation (lag, s)", "least-squares spectrum (Hz)",
+              "Allan deviation (tau, s)", "cross-correlation with channels (lag, samples)",
+              "slow part: 1 s means and trend fit (s)", "CUSUM (s)",
+              "residual against strongest product (binned)"]
+    for ax, text in zip(axes, titles):
+        ax.set_title(text, fontsize="medium")
+        ax.grid(True, alpha=0.3)
+        if ax.lines:
+            ax.legend(fontsize="x-small")
+    axes[7].axis("off")
+    axes[7].text(0, 1, _fired_text(result), va="top", family="monospace", fontsize="small")
+    fig.suptitle(title)
+    return fig
+
+
+def result_residual(result: LoopResult, label: str) -> np.ndarray:
+    return result.residual_before if label == "before" else result.residual_after
+
+
+def _smooth(s: np.ndarray, width: int = 25) -> np.ndarray:
+    return np.convolve(s, np.ones(width) / width, mode="same")
+
+
+def _block_means(time: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    step = max(1, int(round(1.0 / (time[1] - time[0])))) if len(time) > 1 else 1
+    m = len(r) // step * step
+    return time[:m:step], r[:m].reshape(-1, step).mean(axis=1)
+
+
+def _binned(x: np.ndarray, r: np.ndarray, bins: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    edges = np.quantile(x, np.linspace(0, 1, bins + 1))
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+    centres = np.array([x[idx == b].mean() for b in range(bins)])
+    return centres, np.array([r[idx == b].mean() for b in range(bins)])
+
+
+def _fired_text(result: LoopResult) -> str:
+    lines = ["tests that fire (before -> after):"]
+    for b, a in zip(result.findings_before, result.findings_after):
+        name = b.test + (f" {b.evidence['channel']}" if b.test == "aux" else "")
+        yes = {True: "yes", False: "no"}
+        lines.append(f"  {name:<18} {yes[b.fired]:>3} -> {yes[a.fired]}")
+    lines.append("effects kept:")
+    lines += [f"  {s.effect.describe()}" for s in result.steps] or ["  none"]
+    return "\n".join(lines)
+
+
+def write_loop_report(result: LoopResult, out_dir: Path, title: str) -> list[Path]:
+    """Write ``report.md``, the effects and diagnostics tables and the residual figure."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    effects = effects_table(result)
+    diagnostics = findings_table(result.findings_before, result.findings_after)
+    paths = write_tables(effects, out_dir, "effects")
+    paths += write_tables(diagnostics, out_dir, "diagnostics")
+    paths += save_figure(residual_figure(result, title), out_dir, "residual")
+    paths.append(out_dir / "report.md")
+    write_text(paths[-1], report_markdown(result, title, effects, diagnostics))
+    return paths
+
+
+def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
+                    diagnostics: pd.DataFrame) -> str:
+    cfg, seg = result.config, result.segments
+    spans = ", ".join(f"{k} {s.start / cfg.rate:g}-{s.stop / cfg.rate:g} s" for k, s in seg.items())
+    lines = [
+        f"# Residual loop: {title}", "",
+        f"Segments: {spans}. Starting model: FOS, lags 1-{cfg.max_lag}, CP 1. Each diagnostic "
+        f"is a test at level {cfg.alpha:g}; an effect is kept only if it lowers the evaluation "
+        f"segment's one-step or outage error beyond noise (forecast-encompassing t test at "
+        f"{cfg.accept_alpha:g}). The prediction segment decides nothing: it gives the numbers "
+        "below.", "",
+        "## Before and after, prediction segment", "", markdown_table(effects, digits=4), "",
+        "## Diagnostics of the first and the final model", "",
+        markdown_table(diagnostics, digits=3), "",
+    ]
+    if result.rejected:
+        lines += ["## Candidates that did not survive the evaluation segment", ""]
+        for r in result.rejected:
+            ev = r["evaluation"]
+            lines.append(f"- {r['effect']}: one-step gain {ev['one_step_gain']:.3g} (p "
+                         f"{ev['one_step_p']:.2g}), outage gain {ev['outage_gain']:.3g} "
+                         f"(p {ev['outage_p']:.2g})")
+        lines.append("")
+    if result.unexplained:
+        lines += [f"Still firing at the end, with no effect that survives: "
+                  f"{', '.join(result.unexplained)}.", ""]
+    lines += ["![residual diagnostics before and after](residual.png)", ""]
+    return "\n".join(lines)

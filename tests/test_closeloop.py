@@ -1,0 +1,90 @@
+"""The residual loop on data_synth records whose effect nobody declared (issue 5)."""
+
+import numpy as np
+import pytest
+
+from data_synth import make_scenario
+from data_synth.true_effects import true_effects
+from fosmodel.closeloop import LoopConfig, close_loop, score_family
+from fosmodel.effects import CandidateFamily
+from fosmodel.exceptions import InputError
+
+
+def _run(name, seed, **kw):
+    rec = make_scenario(name, seed=seed, **kw)
+    y = rec.columns[rec.target]
+    channels = {k: v for k, v in rec.columns.items() if k != rec.target}
+    config = LoopConfig(rate=rec.rate, sensor="gyro", units=rec.truth["units"])
+    return rec, y, channels, config, close_loop(y, channels, config)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("name, kind", [
+    ("undeclared_temperature", "aux"), ("undeclared_vibration", "periodic"),
+    ("undeclared_nonlinear", "nonlinear"), ("undeclared_drift", "drift"),
+    ("undeclared_aux_lag", "aux"), ("undeclared_step", "step")])
+def test_loop_names_the_effect_and_recovers_half_of_what_the_truth_gives(name, kind, seed):
+    rec, y, channels, config, res = _run(name, seed)
+    assert [s.effect.kind for s in res.steps] == [kind]
+    step = res.steps[0]
+    ((true, slow),) = true_effects(rec.truth)
+    metric = "outage_mse" if slow else "mse"
+    if kind == "aux":
+        assert step.effect.channel == true.channel
+    if name == "undeclared_aux_lag":
+        assert step.lag == 3
+    if kind == "periodic":
+        assert abs(step.effect.freq_hz - true.freq_hz) < 0.05
+    # the error the loop removes on the prediction segment, against the truth's
+    time = np.arange(len(y)) / rec.rate
+    family = CandidateFamily(config.max_lag).add(true, channels, time, res.segments["train"])
+    truth = score_family(y, channels, config, family)
+    before, after = res.before[metric], res.after[metric]
+    assert before - after >= 0.5 * (before - truth[metric]) > 0
+
+
+@pytest.mark.parametrize("name", ["clean", "unrelated_temperature"])
+def test_controls_add_nothing_and_never_worsen(name):
+    added = 0
+    for seed in range(20):
+        _, _, _, _, res = _run(name, seed)
+        added += bool(res.steps)
+        assert res.after["mse"] <= 1.01 * res.before["mse"]
+    assert added <= 1
+
+
+def test_two_effects_at_once_are_both_found():
+    _, _, _, _, res = _run("temperature_and_vibration", 0)
+    found = {(s.effect.kind, s.effect.channel) for s in res.steps}
+    assert ("aux", "temp_c") in found and any(k == "periodic" for k, _ in found)
+    freq = next(s.effect.freq_hz for s in res.steps if s.effect.kind == "periodic")
+    assert abs(freq - 7.3137) < 0.05
+
+
+def test_the_prediction_segment_never_decides():
+    rec, y, channels, config, res = _run("undeclared_vibration", 0)
+    z = y.copy()
+    predict = res.segments["predict"]
+    z[predict] += 5 * np.sin(np.arange(predict.stop - predict.start) * 0.37)  # a new effect
+    other = close_loop(z, channels, config)
+    assert [s.effect for s in other.steps] == [s.effect for s in res.steps]
+    assert [s.comparison for s in other.steps] == [s.comparison for s in res.steps]
+
+
+def test_json_has_the_documented_layout():
+    _, _, _, _, res = _run("undeclared_aux_lag", 0)
+    data = res.to_json_dict()
+    keys = {"mse", "position_error_m", "outage_mse", "bias_rms", "outage_position_error_m",
+            "terms"}
+    assert keys <= set(data["before"]) and keys <= set(data["after"])
+    effect = data["effects"][0]
+    assert {"kind", "channel", "lag", "freq_hz", "evidence", "mse_before", "mse_after"} <= set(
+        effect)
+    assert effect["kind"] == "aux" and effect["channel"] == "accel_x" and effect["lag"] == 3
+    assert effect["freq_hz"] is None and effect["mse_after"] < effect["mse_before"]
+
+
+def test_too_short_a_record_is_refused():
+    rec = make_scenario("clean", duration=60.0, seed=0)
+    with pytest.raises(InputError, match="too short for the split"):
+        close_loop(rec.columns["gyro_x"], {}, LoopConfig(rate=rec.rate))

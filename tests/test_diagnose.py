@@ -1,0 +1,157 @@
+"""Each residual test: agreement with references, detection, and its false-alarm rate."""
+
+import numpy as np
+import pytest
+from scipy.signal import lfilter, lombscargle
+
+from fosmodel import diagnose as dg
+from fosmodel.fos import fos
+
+RATE = 100.0
+
+
+def _white(n, seed):
+    return np.random.default_rng(seed).standard_normal(n)
+
+
+def _time(n):
+    return np.arange(n) / RATE
+
+
+def _false_alarm_bound(trials, alpha):
+    """Upper end of what a test at level alpha may fire in `trials` (binomial, about 4 sd)."""
+    return trials * alpha + 4 * np.sqrt(trials * alpha * (1 - alpha)) + 1
+
+
+def test_least_squares_spectrum_equals_scipy_lomb_scargle():
+    n = 600
+    t = _time(n)
+    x = _white(n, 0) + 0.3 * np.sin(2 * np.pi * 3.07 * t) + 5.0
+    freqs, s = dg.least_squares_spectrum(x, RATE)
+    ref = lombscargle(t, x, 2 * np.pi * freqs, normalize=True, floating_mean=True)
+    np.testing.assert_allclose(s, ref, rtol=1e-10, atol=1e-14)
+
+
+def test_closed_form_sinusoid_correlations_equal_explicit_sums():
+    n, t0 = 777, 3.21
+    time = t0 + np.arange(n) / RATE
+    omega = 2 * np.pi * np.array([0.5, 7.31, 7.31, 7.33, 49.9, 49.9])
+    phase = np.array([0.0, 0.3, 1.2, 2.0, 0.0, np.pi / 2])
+    cols = np.cos(np.outer(time, omega) + phase)
+    x = _white(n, 11)
+    corr = dg._SinusoidCorrelations(omega, phase, t0, 1 / RATE, n, cols.T @ x / n, x @ x / n)
+    np.testing.assert_allclose(corr.means, cols.mean(axis=0), atol=1e-12)
+    np.testing.assert_allclose(corr.diag, (cols**2).mean(axis=0), atol=1e-12)
+    for j in range(len(omega)):
+        np.testing.assert_allclose(corr.column(j), cols.T @ cols[:, j] / n, atol=1e-12)
+
+
+def test_refine_frequency_is_the_fos_choice_between_bins():
+    n = 20000
+    t = _time(n)
+    x = 0.2 * np.cos(2 * np.pi * 7.3137 * t + 0.7) + 0.5 * _white(n, 1)
+    f0 = round(7.3137 * n / RATE) * RATE / n  # nearest FFT bin
+    f = dg.refine_frequency(x, t, f0, RATE)
+    assert abs(f - 7.3137) < 0.05 * RATE / n  # a twentieth of a bin
+    # the same choice as FOS over the explicit candidate matrix
+    grid = f0 + np.arange(-1, 1.01, 0.02) * RATE / n
+    phases = np.arange(16) * np.pi / 16
+    cols = np.column_stack([np.cos(2 * np.pi * fr * t + p) for fr in grid for p in phases])
+    first = fos(cols, x, max_terms=1, stop="max_terms").support[0]
+    assert f == pytest.approx(grid[first // 16], abs=1e-12)
+
+
+def test_periodic_finds_an_off_grid_sinusoid_and_stays_quiet_on_white_noise():
+    n = 20000
+    t = _time(n)
+    found = dg.periodic(0.05 * np.cos(2 * np.pi * 7.3137 * t) + 0.5 * _white(n, 2), t, RATE)
+    assert found.fired and abs(found.evidence["freq_hz"] - 7.3137) < 0.001
+    fires = sum(dg.periodic(_white(4000, s), _time(4000), RATE, alpha=0.05).fired
+                for s in range(100))
+    assert fires <= _false_alarm_bound(100, 0.05)
+
+
+def test_aux_finds_channel_and_lag_and_respects_its_level_with_slow_channels():
+    rng = np.random.default_rng(3)
+    n = 20000
+    x = lfilter([1.0], [1.0, -0.6], rng.standard_normal(n))
+    r = 0.1 * np.r_[np.zeros(3), x[:-3]] + rng.standard_normal(n)
+    found = dg.aux_correlation(r, {"accel": x, "temp": np.cumsum(rng.standard_normal(n))})
+    assert found[0].fired and found[0].evidence["lag"] == 3
+    assert not found[1].fired
+    # a slowly wandering channel against a residual that is not quite white
+    fires = 0
+    for seed in range(100):
+        g = np.random.default_rng(seed)
+        resid = lfilter([1.0], [1.0, -0.3], g.standard_normal(4000))
+        temp = np.cumsum(g.standard_normal(4000)) + 20
+        fires += dg.aux_correlation(resid, {"temp": temp}, alpha=0.05)[0].fired
+    assert fires <= _false_alarm_bound(100, 0.05)
+
+
+def test_nonlinearity_reset():
+    rng = np.random.default_rng(4)
+    n = 20000
+    y = lfilter([1.0], [1.0, -0.5], rng.standard_normal(n))
+    lagged = np.column_stack([np.r_[np.zeros(k), y[:-k]] for k in range(1, 5)])
+    r = 0.1 * lagged[:, 0] * lagged[:, 1] + rng.standard_normal(n)
+    found = dg.nonlinearity(r, lagged)
+    assert found.fired and found.evidence["strongest"] == "y[n-1]*y[n-2]"
+    fires = 0
+    for seed in range(100):
+        g = np.random.default_rng(100 + seed)
+        yy = lfilter([1.0], [1.0, -0.5], g.standard_normal(3000))
+        lag = np.column_stack([np.r_[np.zeros(k), yy[:-k]] for k in range(1, 5)])
+        fires += dg.nonlinearity(g.standard_normal(3000), lag, alpha=0.05).fired
+    assert fires <= _false_alarm_bound(100, 0.05)
+
+
+@pytest.mark.parametrize("shape, form", [("linear", "linear"), ("warmup", "exponential")])
+def test_trend_detects_and_names_the_form(shape, form):
+    n = 20000
+    t = _time(n)
+    drift = 0.002 * t if shape == "linear" else 0.3 * (1 - np.exp(-t / 30.0))
+    found = dg.trend(drift + _white(n, 5), t)
+    assert found.fired and found.evidence["form"] in (form, "linear+exponential")
+    if shape == "warmup":
+        assert 15 < found.evidence["tau_s"] < 60
+
+
+def test_trend_and_step_false_alarms_on_white_noise():
+    t = _time(3000)
+    trend_fires = step_fires = 0
+    for seed in range(100):
+        x = _white(3000, 200 + seed)
+        trend_fires += dg.trend(x, t, alpha=0.05).fired
+        step_fires += dg.change_point(x, t, alpha=0.05).fired
+    assert trend_fires <= _false_alarm_bound(100, 0.05)
+    assert step_fires <= _false_alarm_bound(100, 0.05)
+
+
+def test_change_point_locates_a_step():
+    n = 20000
+    t = _time(n)
+    found = dg.change_point(_white(n, 6) + 0.1 * (t >= 123.4), t)
+    assert found.fired and abs(found.evidence["time_s"] - 123.4) < 5.0
+    assert found.evidence["shift"] == pytest.approx(0.1, abs=0.03)
+
+
+def test_allan_flags_a_random_walk_and_not_white_noise():
+    n = 30000
+    white = dg.allan(_white(n, 7), RATE)
+    assert not white.fired and white.evidence["slope"] == pytest.approx(-0.5, abs=0.2)
+    walk = dg.allan(_white(n, 7) + np.cumsum(_white(n, 8)) * 0.02, RATE)
+    assert walk.fired and walk.evidence["slope"] > 0
+
+
+def test_whiteness_ljung_box():
+    assert not dg.whiteness(_white(5000, 9)).fired
+    colored = lfilter([1.0], [1.0, -0.2], _white(5000, 9))
+    assert dg.whiteness(colored).fired
+
+
+def test_finding_serialises():
+    f = dg.whiteness(_white(1000, 10))
+    d = f.to_dict()
+    assert set(d) == {"test", "statistic", "p_value", "alpha", "fired", "evidence"}
+    assert d["fired"] is False and isinstance(d["p_value"], float)
