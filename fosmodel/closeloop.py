@@ -306,7 +306,8 @@ def _compare(a: BoundModel, b: BoundModel, y, segment: slice, config: LoopConfig
     predictions explain ``a``'s errors?  ``beta = sum(e_a d) / sum(d^2)`` with
     ``d`` the change, and its t statistic from the spread over groups: ten
     contiguous batches for the one-step errors, consecutive outage windows of
-    ``eval_horizon_s`` for the free-run errors.  With no effect, ``beta`` is centred
+    ``eval_horizon_s`` (at most :data:`MAX_WINDOWS`, evenly spread) for the
+    free-run errors.  With no effect, ``beta`` is centred
     on 0 (the candidate was fit on other samples).  ``b`` is kept if either test
     is significant at ``accept_alpha / 2`` (one-sided) and the same errors' mean
     square is lower with ``b``.
@@ -317,6 +318,8 @@ def _compare(a: BoundModel, b: BoundModel, y, segment: slice, config: LoopConfig
     one_step = _encompassing(list(zip(np.array_split(ea, 10), np.array_split(pb - pa, 10))))
     h = round(config.eval_horizon_s * config.rate)
     starts = np.arange(segment.start, stop - h + 1, h)
+    if len(starts) > MAX_WINDOWS:  # enough for the t test; spread over the segment
+        starts = starts[np.linspace(0, len(starts) - 1, MAX_WINDOWS).round().astype(int)]
     fa = free_run_errors(a, y, starts, h)
     fb = free_run_errors(b, y, starts, h)
     outage = _encompassing(list(zip(fa, fa - fb)))
@@ -350,6 +353,7 @@ def _encompassing(groups: list[tuple[np.ndarray, np.ndarray]]) -> tuple[float, f
     return beta, t, float(stats.t.sf(t, len(groups) - 1))
 
 
+MAX_WINDOWS = 100  # most outage windows of the evaluation test
 STRONG_BIC = 6.0  # Kass and Raftery: a BIC difference of 6 or more is strong evidence
 
 

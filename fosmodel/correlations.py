@@ -30,7 +30,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from .candidates import OUTPUT, Term
 
-_BLOCK = 20_000  # most entries tabulated at once for the linear candidates' Gram columns
+_BLOCK = 16  # most linear candidates whose Gram columns are tabulated at once
 _SCRATCH = threading.local()
 
 
@@ -132,11 +132,13 @@ class LagCorrelations:
 
         A linear candidate's column holds moments of degree at most width + 1,
         all table lookups when that is within ``table_degree``; for up to
-        ``_BLOCK`` entries one batch costs less than a call per search step.
+        ``_BLOCK`` linear candidates (a search selects most of them) one batch
+        costs less than a call per search step.  With more, the search needs
+        only a few of their columns, and fetches those.
         """
         linear = np.flatnonzero((self._ch >= 0).sum(axis=1) == 1)
         k = len(self._ch)
-        if width + 1 > self._table_degree or not 0 < len(linear) * k <= _BLOCK:
+        if width + 1 > self._table_degree or not 0 < len(linear) <= _BLOCK:
             return {}
         ch = np.empty((len(linear) * k, width + 1), dtype=np.int64)
         lag = np.empty_like(ch)

@@ -324,14 +324,18 @@ class FOSModel(BaseEstimator):
         self._check_fitted()
         y0, drive = free_run_inputs(y_init, n_steps, noise, self.lag_window_)
         warn_if_unstable(self.ar_coefficients(), "the fitted output dynamics")
-        start, total = len(y0), len(y0) + int(n_steps)
-        signals = self._signals(np.r_[y0, np.zeros(n_steps)], exog, total)
-        ar, nonlinear, drive = self._split_terms(signals, start, drive)
+        n0, spec = self.lag_window_, self.spec_
+        channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y0) + int(n_steps))
+        cut = len(y0) - n0  # only the last N0 samples of the past reach the run
+        recent = {OUTPUT: np.r_[y0[cut:], np.zeros(n_steps)],
+                  **{k: v[cut:] for k, v in channels.items()}}
+        signals, _ = self._centred(recent, self._offsets_for(channels))
+        ar, nonlinear, drive = self._split_terms(signals, n0, drive)
         with np.errstate(over="ignore", invalid="ignore"):
             if nonlinear:
-                out = self._run_nonlinear(signals[OUTPUT], start, ar, nonlinear, drive)
+                out = self._run_nonlinear(signals[OUTPUT], n0, ar, nonlinear, drive)
             else:
-                out = ar_free_run(ar, signals[OUTPUT][:start], drive)
+                out = ar_free_run(ar, signals[OUTPUT][:n0], drive)
         return cut_at_divergence(out) + self.offsets_[OUTPUT]
 
     def _split_terms(self, signals, start, drive):
@@ -357,19 +361,24 @@ class FOSModel(BaseEstimator):
 
     @staticmethod
     def _run_nonlinear(y, start, ar, nonlinear, drive):
-        y = y.copy()
-        lags = np.flatnonzero(ar) + 1
-        a = ar[lags - 1]
+        """The recursion sample by sample, in plain Python floats (scalar work)."""
+        out = y.tolist()
+        lags = [(int(k) + 1, float(ar[k])) for k in np.flatnonzero(ar)]
+        terms = [(w.tolist(), [int(k) for k in y_lags]) for w, y_lags in nonlinear]
+        drive = drive.tolist()
         for step in range(len(drive)):
             n = start + step
-            value = drive[step] + a @ y[n - lags]
-            for w, y_lags in nonlinear:
-                value += w[step] * np.prod(y[n - y_lags])
+            value = drive[step] + sum(c * out[n - k] for k, c in lags)
+            for w, y_lags in terms:
+                p = w[step]
+                for k in y_lags:
+                    p *= out[n - k]
+                value += p
             if not math.isfinite(value):
-                y[n:] = np.nan
+                out[n:] = [math.nan] * (len(out) - n)
                 break
-            y[n] = value
-        return y[start:]
+            out[n] = value
+        return np.asarray(out[start:])
 
     # -- reporting and persistence -------------------------------------------------------
 
@@ -520,5 +529,13 @@ class BoundModel:
         return self.model.predict(y, self._cut(len(y)))
 
     def simulate(self, y_init: object, n_steps: int, noise: object | None = None) -> np.ndarray:
-        """Free run after ``y_init`` (the record's first samples) for ``n_steps`` samples."""
-        return self.model.simulate(y_init, n_steps, self._cut(len(y_init) + n_steps), noise)
+        """Free run after ``y_init`` (the record's first samples) for ``n_steps`` samples.
+
+        Only the last ``lag_window_`` samples of the past reach the run, so only
+        they (and the inputs from there on) are passed on.
+        """
+        start, n0 = len(y_init), self.lag_window_
+        cut = max(start - n0, 0)
+        inputs = ({k: v[cut : start + n_steps] for k, v in self.inputs.items()}
+                  if self.inputs else None)
+        return self.model.simulate(np.asarray(y_init)[cut:], n_steps, inputs, noise)

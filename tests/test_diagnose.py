@@ -145,6 +145,13 @@ def test_allan_flags_a_random_walk_and_not_white_noise():
 
 
 def test_whiteness_ljung_box():
+    from statsmodels.stats.diagnostic import acorr_ljungbox
+
+    x = lfilter([1.0], [1.0, -0.05], _white(3000, 12))
+    ref = acorr_ljungbox(x, lags=[20], return_df=True)
+    found = dg.whiteness(x)
+    assert found.statistic == pytest.approx(float(ref["lb_stat"].iloc[0]), rel=1e-9)
+    assert found.p_value == pytest.approx(float(ref["lb_pvalue"].iloc[0]), rel=1e-6)
     assert not dg.whiteness(_white(5000, 9)).fired
     colored = lfilter([1.0], [1.0, -0.2], _white(5000, 9))
     assert dg.whiteness(colored).fired
