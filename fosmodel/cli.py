@@ -1,4 +1,4 @@
-"""Command line: ``fosmodel fit | predict | study | close-loop | synth | demo``.
+"""Command line: ``fosmodel fit | predict | study | close-loop | allan | synth | demo``.
 
 Exit codes: 0 success, 2 bad input or usage (one-line message on stderr),
 1 internal error (with a hint to report it; ``--verbose`` shows the traceback).
@@ -217,6 +217,26 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_allan(args: argparse.Namespace) -> int:
+    from .allan import allan_deviation, fit_noise, write_allan
+
+    json_path = _out_path(args.json) if args.json else None
+    rec = _load(args)
+    y = rec.column(args.column)
+    result = allan_deviation(y, rec.require_rate(), units=args.units, sensor=args.sensor)
+    fit = fit_noise(result)
+    out = Path(args.out)
+    write_allan(result, fit, out, args.title or f"{args.column} of {Path(args.file).name}")
+    print(fit.summary())
+    if json_path:
+        data = {"source": rec.source, "column": args.column, "allan": result.to_dict(),
+                "noise": fit.to_dict()}
+        write_text(json_path, json.dumps(data, indent=1) + "\n")
+    print(f"Allan variance report written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else ""))
+    return 0
+
+
 def _cmd_synth(args: argparse.Namespace) -> int:
     from data_synth.cli import run
 
@@ -308,6 +328,19 @@ def build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--out", required=True, help="output directory (created)")
     loop.add_argument("--json", help="also write the before/after metrics and effects as JSON")
     loop.set_defaults(func=_cmd_close_loop)
+
+    allan = sub.add_parser("allan", help="Allan deviation with confidence intervals and the "
+                           "IEEE Std 952 noise coefficients")
+    allan.add_argument("file", help="CSV, .npy or .parquet record")
+    allan.add_argument("--column", required=True, help="column to analyse (a rate signal)")
+    allan.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
+    _add_loader_options(allan)
+    allan.add_argument("--sensor", choices=("accel", "gyro"), help="for navigation units")
+    allan.add_argument("--units", help="units of the column (with --sensor)")
+    allan.add_argument("--title", help="title of the figure")
+    allan.add_argument("--out", required=True, help="output directory (created)")
+    allan.add_argument("--json", help="also write the Allan deviation and coefficients as JSON")
+    allan.set_defaults(func=_cmd_allan)
 
     from data_synth.cli import configure_parser
 
