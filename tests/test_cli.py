@@ -123,6 +123,14 @@ def test_demo_writes_outputs_and_says_where(tmp_path, capsys):  # the main job, 
         assert np.all(table[f"MSE ({units})^2"] > 0)
         for name in ("report.md", "study.csv", "order_paper.png", "order_fair.svg"):
             assert (tmp_path / "demo" / sensor / name).exists()
+    # the bundled real MPU-6050 record: study and residual loop, end to end
+    assert "MPU-6050 record bundled with fosmodel (MIT licence): 44930 samples" in out
+    assert "Residual loop on each axis of the MPU-6050 record" in out
+    mpu = tmp_path / "demo" / "mpu6050"
+    assert (mpu / "study_gx" / "comparison.csv").exists()
+    assert (mpu / "study_ay" / "order_fair.png").exists()
+    for axis in ("ax", "ay", "az", "gx", "gy", "gz"):
+        assert (mpu / f"loop_{axis}" / "report.md").exists()
 
 
 def test_console_script_is_installed(record, tmp_path):
