@@ -80,7 +80,7 @@ def _out_path(path: str) -> Path:
 def _load(args: argparse.Namespace) -> Record:
     """The record of ``args.file`` with the loader options; its notes go to stderr."""
     rec = load_record(args.file, rate=args.rate, scale=parse_scales(args.scale or []),
-                      uniform=args.uniform, outliers=args.outliers)
+                      uniform=args.uniform, outliers=args.outliers, gaps=args.gaps)
     for note in rec.notes:
         print(f"fosmodel: note: {note}", file=sys.stderr)
     return rec
@@ -96,6 +96,12 @@ def _add_loader_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--outliers", choices=OUTLIER_MODES, default="keep",
                         help=f"outliers (|x - median| > {OUTLIER_K:g} x 1.4826 MAD): keep (report, "
                              "default), clip or drop")
+    gaps = parser.add_mutually_exclusive_group()
+    gaps.add_argument("--fill", dest="gaps", action="store_const", const="fill",
+                      help="fill gaps of the time column by linear interpolation")
+    gaps.add_argument("--segments", dest="gaps", action="store_const", const="segments",
+                      help="keep gaps and use the contiguous segments (fit and predict)")
+    parser.set_defaults(gaps="refuse")
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
@@ -109,7 +115,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     print(f"candidates: {count_candidates(spec)} (L={spec.max_lag}, CP={spec.degree}"
           + "".join(f", {k}:0-{v}" for k, v in exog_lags.items()) + ")")
     exog = {name: rec.column(name) for name in exog_lags}
-    model.fit(pd.Series(y, name=args.column), exog)
+    model.fit(pd.Series(y, name=args.column), exog, segments=rec.segments)
     print(model.summary())
     meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
             "n_samples": rec.n_samples}
@@ -142,7 +148,7 @@ def _cmd_predict(args: argparse.Namespace) -> int:
         raise InputError("the model does not say which column it models; pass --column")
     y = rec.column(column)
     channels = {name: rec.column(name) for name in [*model.spec_.exog_lags, *model.spec_.columns]}
-    pred = model.predict(y, channels)
+    pred = model.predict(y, channels, segments=rec.segments)
     frame = pd.DataFrame({column: y, "prediction": pred, "residual": y - pred})
     if rec.time is not None:
         frame.insert(0, "time", rec.time)
@@ -161,6 +167,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
 
     json_path = _out_path(args.json) if args.json else None
     rec = _load(args)
+    rec.require_contiguous("the model-order study")
     y = rec.column(args.column)
     protocols = ["paper", "fair"] if args.protocol == "both" else [args.protocol]
     config = StudyConfig(
@@ -198,6 +205,7 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
 
     json_path = _out_path(args.json) if args.json else None
     rec = _load(args)
+    rec.require_contiguous("the residual loop")
     y = rec.column(args.column)
     aux = args.aux if args.aux is not None else [c for c in rec.names if c != args.column]
     channels = {name: rec.column(name) for name in aux}
@@ -222,6 +230,7 @@ def _cmd_allan(args: argparse.Namespace) -> int:
 
     json_path = _out_path(args.json) if args.json else None
     rec = _load(args)
+    rec.require_contiguous("the Allan deviation")
     y = rec.column(args.column)
     result = allan_deviation(y, rec.require_rate(), units=args.units, sensor=args.sensor)
     fit = fit_noise(result)

@@ -352,3 +352,25 @@ class LagCorrelations:
                 factors.append(self._power(*last, n0, n))
             self._plans[key] = plan
         return plan
+
+
+class PooledCorrelations:
+    """Correlations over several windows: the contiguous segments of a record with gaps.
+
+    Each part gives means over its own window (each segment with its own lag
+    window, so no lag reaches across a gap); their sample-weighted average is
+    the mean over all the windows together.
+    """
+
+    def __init__(self, parts: Sequence) -> None:
+        weights = np.array([p.n_samples for p in parts], dtype=float)
+        self._parts, self._w = parts, weights / weights.sum()
+        self.n_samples = int(weights.sum())
+        self.y_mean = float(sum(w * p.y_mean for w, p in zip(self._w, parts)))
+        self.y_mean_sq = float(sum(w * p.y_mean_sq for w, p in zip(self._w, parts)))
+        self.means = sum(w * p.means for w, p in zip(self._w, parts))
+        self.target = sum(w * p.target for w, p in zip(self._w, parts))
+        self.diag = sum(w * p.diag for w, p in zip(self._w, parts))
+
+    def column(self, j: int) -> np.ndarray:
+        return sum(w * p.column(j) for w, p in zip(self._w, self._parts))

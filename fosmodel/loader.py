@@ -49,6 +49,7 @@ from .validation import did_you_mean
 
 TIME_COLUMNS = ("time", "time_s", "t_s")
 OUTLIER_MODES = ("keep", "clip", "drop")
+GAP_MODES = ("refuse", "fill", "segments")
 #: An outlier is farther than ``OUTLIER_K`` robust standard deviations from the column median.
 OUTLIER_K = 10.0
 _MAD_TO_SIGMA = 1.4826
@@ -82,7 +83,16 @@ class Record:
         Preamble entries other than the sample rate, e.g. ``{"Logging Type": "1"}``.
     outliers : dict of str to ndarray
         For each column with outliers, their sample indices in the file (before any drop).
+    segments : list of slice or None
+        With ``gaps="segments"``, the contiguous runs of samples between the
+        time column's gaps; None for a contiguous record.
     """
+
+    def require_contiguous(self, what: str) -> None:
+        """Refuse a record in segments for ``what``, which needs one contiguous run."""
+        if self.segments is not None and len(self.segments) > 1:
+            raise InputError(f"{self.source}: {what} needs a contiguous record, this one has "
+                             f"{len(self.segments)} segments; pass --fill instead of --segments")
 
     source: str
     data: dict[str, np.ndarray]
@@ -91,6 +101,7 @@ class Record:
     notes: list[str] = field(default_factory=list)
     metadata: dict[str, str] = field(default_factory=dict)
     outliers: dict[str, np.ndarray] = field(default_factory=dict)
+    segments: list[slice] | None = None
 
     @property
     def n_samples(self) -> int:
@@ -133,6 +144,7 @@ def load_record(
     scale: Mapping[str, float] | None = None,
     uniform: bool = False,
     outliers: str = "keep",
+    gaps: str = "refuse",
 ) -> Record:
     """Read and validate a record.
 
@@ -156,6 +168,11 @@ def load_record(
         deviations (1.4826 MAD) from their column's median: report them only,
         clip them to that bound, or drop their rows (only from a record with a
         time column).  They are reported in ``Record.notes`` and ``Record.outliers``.
+    gaps : {"refuse", "fill", "segments"}, default "refuse"
+        What to do with gaps in a regular time column (intervals over 1.5 times
+        the median one): refuse the record, fill them by linear interpolation
+        onto the regular grid, or keep them and list the contiguous runs in
+        ``Record.segments`` (to fit on them).  Always reported.
 
     Returns
     -------
@@ -175,6 +192,8 @@ def load_record(
         raise InputError(f"the sample rate must be a positive number of Hz, got {rate!r}")
     if outliers not in OUTLIER_MODES:
         raise InputError(f"outliers must be one of {', '.join(OUTLIER_MODES)}, got {outliers!r}")
+    if gaps not in GAP_MODES:
+        raise InputError(f"gaps must be one of {', '.join(GAP_MODES)}, got {gaps!r}")
     frame, first_line, preamble = _read(path)
     if frame.shape[1] == 0:
         raise InputError(f"{src}: no columns")
@@ -189,13 +208,17 @@ def load_record(
     if not data:
         raise InputError(f"{src}: only a time column, no data columns")
     _note_integer_columns(data, scale or {}, notes)
+    segments = None
     if time is not None:
-        rate, time = _time_base(time, rate, given_by, uniform, src, time_name, first_line, notes)
+        rate, time = _time_base(time, rate, given_by, uniform, src, time_name, first_line,
+                                notes, gaps)
+        if gaps != "refuse" and not uniform:
+            time, segments = _handle_gaps(data, time, gaps, src, time_name, first_line, notes)
     elif uniform:
         notes.append("--uniform has no effect: the record has no time column")
     found = _find_outliers(data)
     record = Record(src, data, float(rate) if rate is not None else None, time, notes, metadata,
-                    {name: out.index for name, out in found.items()})
+                    {name: out.index for name, out in found.items()}, segments)
     _handle_outliers(record, found, outliers, first_line)
     return record
 
@@ -428,8 +451,13 @@ def _note_integer_columns(data: dict[str, np.ndarray], scale: Mapping[str, float
 
 
 def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool, src: str,
-               name: str, first_line: int, notes: list[str]) -> tuple[float, np.ndarray]:
-    """The rate and time of a record with a time column, after checking the column."""
+               name: str, first_line: int, notes: list[str],
+               gaps: str = "refuse") -> tuple[float, np.ndarray]:
+    """The rate and time of a record with a time column, after checking the column.
+
+    With ``gaps`` other than "refuse" the gap check is left to :func:`_handle_gaps`
+    and the rate is the median interval's.
+    """
     if len(time) < 2:
         if rate is None:
             raise InputError(f"{src}: a single sample cannot give a rate; pass --rate")
@@ -437,9 +465,11 @@ def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: boo
     dt = np.diff(time)
     bursty = _is_bursty(time, dt)
     _check_order(time, dt, src, name, first_line, repeats_allowed=bursty)
-    if not (bursty or uniform):
+    if not (bursty or uniform or gaps != "refuse"):
         _check_gaps(dt, src, name, first_line)
     measured = (len(time) - 1) / (time[-1] - time[0])  # uniform: the span is the best estimate
+    if gaps != "refuse" and not (bursty or uniform):
+        measured = 1.0 / float(np.median(dt))  # with gaps, the span would count them
     kind = "the effective rate of the bursty time column" if bursty else "the time column"
     if rate is not None and abs(measured - rate) > _RATE_TOLERANCE * rate:
         raise InputError(f"{src}: {given_by} disagrees with {kind} ({measured:.6g} Hz)")
@@ -456,12 +486,36 @@ def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: boo
         notes.append(f"{said}: samples taken as uniformly spaced at {rate:.6g} Hz; time is "
                      "sample number / rate")
     elif uniform:
-        gaps = int(np.count_nonzero(dt > 1.5 * np.median(dt)))
+        n_gaps = int(np.count_nonzero(dt > 1.5 * np.median(dt)))
         notes.append(f"--uniform: samples taken as uniformly spaced at {rate:.6g} Hz, the rate of "
-                     f"column {name!r} ({gaps} gap(s) in it ignored); time is sample number / rate")
+                     f"column {name!r} ({n_gaps} gap(s) in it ignored); time is sample number / "
+                     "rate")
     if bursty or uniform:
         time = np.arange(len(time)) / rate
     return rate, time
+
+
+def _handle_gaps(data, time, gaps, src, name, first_line, notes):
+    """Fill the gaps of a regular time column, or list its contiguous segments."""
+    dt = np.diff(time)
+    step = float(np.median(dt))
+    at = np.flatnonzero(dt > 1.5 * step)
+    if not at.size:
+        return time, None
+    where = f"first at {_where(int(at[0]) + 1, first_line)}"
+    if gaps == "segments":
+        bounds = [0, *(at + 1).tolist(), len(time)]
+        segments = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
+        notes.append(f"column {name!r}: {at.size} gap(s), {where}; kept as {len(segments)} "
+                     f"contiguous segments of {', '.join(str(s.stop - s.start) for s in segments)}"
+                     " samples")
+        return time, segments
+    grid = time[0] + step * np.arange(int(round((time[-1] - time[0]) / step)) + 1)
+    for key in data:
+        data[key] = np.interp(grid, time, data[key])
+    notes.append(f"column {name!r}: {at.size} gap(s), {where}; filled by linear interpolation "
+                 f"({len(grid) - len(time)} samples added onto the {step:.6g} s grid)")
+    return grid, None
 
 
 def _is_bursty(time: np.ndarray, dt: np.ndarray) -> bool:
@@ -496,7 +550,8 @@ def _check_gaps(dt, src, name, first_line) -> None:
         i = int(gaps[0]) + 1
         raise InputError(
             f"{src}: column {name!r}, {_where(i, first_line)}: a gap of {dt[gaps[0]]:.6g} s "
-            f"where the sample interval is {step:.6g} s ({gaps.size} gap(s) in the record)"
+            f"where the sample interval is {step:.6g} s ({gaps.size} gap(s) in the record); "
+            "pass --fill to interpolate across them or --segments to fit on the pieces"
         )
 
 

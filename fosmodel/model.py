@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -32,7 +32,7 @@ from .candidates import (
     evaluate_terms,
     generate_terms,
 )
-from .correlations import LagCorrelations
+from .correlations import LagCorrelations, PooledCorrelations
 from .dynamics import (
     ar_free_run,
     ar_roots,
@@ -147,7 +147,10 @@ class FOSModel(BaseEstimator):
     def _spec(self) -> CandidateSpec:
         return CandidateSpec(self.max_lag, self.degree, self.exog_lags or {}, self.columns or ())
 
-    def fit(self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None) -> FOSModel:
+    def fit(
+        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        segments: Sequence[slice] | None = None,
+    ) -> FOSModel:
         """Select terms and weights on the record ``y`` (and its exogenous channels).
 
         Parameters
@@ -156,6 +159,10 @@ class FOSModel(BaseEstimator):
             The modelled signal (numpy array, list or pandas Series).
         exog : dict or DataFrame, optional
             Exogenous channels and user columns by name, each of length N.
+        segments : sequence of slice, optional
+            Contiguous runs of ``y`` between gaps: the fit pools their windows,
+            each with its own lag window, so that no lag reaches across a gap.
+            Runs too short for the lag window are left out.
 
         Returns
         -------
@@ -178,19 +185,26 @@ class FOSModel(BaseEstimator):
                 f"(as a matrix over this record they would take {mib:,.0f} MiB); "
                 "lower the lag, the degree or the channels, or raise max_candidates"
             )
+        runs = _usable(segments, len(y_arr), n0)
         needed = (rule.max_terms or 1) + 2
-        if len(y_arr) - n0 < needed:
+        if sum(s.stop - s.start - n0 for s in runs) < needed:
             raise InputError(
-                f"record too short: {len(y_arr)} samples, but the lag window needs {n0} and "
-                f"fitting {rule.max_terms or 1} term(s) needs {needed} more"
+                f"record too short: {len(y_arr)} samples"
+                + (f" in {len(segments)} segments" if segments is not None else "")
+                + f", but the lag window needs {n0} and fitting {rule.max_terms or 1} term(s) "
+                f"needs {needed} more"
             )
         channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
         signals, offsets = self._centred({OUTPUT: y_arr, **channels}, None)
         terms = [t for t in generate_terms(spec) if not t.is_constant]
+        pieces = [{k: v[s] for k, v in signals.items()} for s in runs]
         if self.correlations == "fast":
-            corr = LagCorrelations(terms, signals, n0)
+            parts = [LagCorrelations(terms, piece, n0) for piece in pieces]
+            corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
         else:
-            corr = _DataCorrelations(evaluate_terms(terms, signals, n0), signals[OUTPUT][n0:])
+            corr = _DataCorrelations(
+                np.vstack([evaluate_terms(terms, piece, n0) for piece in pieces]),
+                np.concatenate([piece[OUTPUT][n0:] for piece in pieces]))
         res = _fos_kernel(corr, rule, intercept=True, dependence_tol=self.dependence_tol)
 
         self.spec_ = spec
@@ -239,11 +253,15 @@ class FOSModel(BaseEstimator):
     def _offsets_for(self, channels: Mapping[str, object]) -> dict[str, float]:
         return {OUTPUT: self.offsets_[OUTPUT], **{k: self.offsets_[k] for k in channels}}
 
-    def predict(self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None):
+    def predict(
+        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        segments: Sequence[slice] | None = None,
+    ):
         """One-step-ahead prediction from the true past, aligned with ``y``.
 
         Sample ``n`` is predicted from ``y[n-1], y[n-2], ...`` and the channels
-        up to ``n``; the first ``lag_window_`` samples have no prediction (NaN).
+        up to ``n``; the first ``lag_window_`` samples (of each segment, if
+        ``segments`` are given) have no prediction (NaN).
 
         Returns
         -------
@@ -254,9 +272,10 @@ class FOSModel(BaseEstimator):
         n = len(signals[OUTPUT])
         n0 = self.lag_window_
         out = np.full(n, np.nan)
-        if n > n0:
-            values = evaluate_terms(self._terms, signals, n0) @ self.coef_
-            out[n0:] = values + self.intercept_ + self.offsets_[OUTPUT]
+        for run in _usable(segments, n, n0):
+            piece = {k: v[run] for k, v in signals.items()}
+            values = evaluate_terms(self._terms, piece, n0) @ self.coef_
+            out[run.start + n0 : run.stop] = values + self.intercept_ + self.offsets_[OUTPUT]
         if isinstance(y, pd.Series):
             return pd.Series(out, index=y.index, name="prediction")
         return out
@@ -495,6 +514,23 @@ class FOSModel(BaseEstimator):
             raise InputError(f"corrupted model file: {type(exc).__name__}: {exc}") from None
         model.meta_ = dict(data.get("meta") or {})
         return model
+
+
+def _usable(segments: Sequence[slice] | None, n: int, n0: int) -> list[slice]:
+    """The runs of samples to use: ``segments`` (checked) or the whole record, each longer
+    than the lag window."""
+    if segments is None:
+        return [slice(0, n)] if n > n0 else []
+    runs, last = [], 0
+    for s in segments:
+        start, stop = s.start or 0, n if s.stop is None else s.stop
+        if not 0 <= start < stop <= n or start < last:
+            raise InputError(f"segments must be ordered, non-overlapping runs within the "
+                             f"{n} samples; got {s}")
+        last = stop
+        if stop - start > n0:
+            runs.append(slice(start, stop))
+    return runs
 
 
 class BoundModel:

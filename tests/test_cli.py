@@ -251,3 +251,26 @@ def test_cli_scale_and_outliers(tmp_path, capsys):
                            (["--outliers", "drop"], "without a time column")):
         code, _, err = _run(["fit", p, "--column", "a", *extra, "--out", out], capsys)
         assert code == 2 and err.count("\n") == 1 and message in err
+
+
+def test_fit_and_predict_on_segments_and_fill(tmp_path, capsys):
+    t = np.r_[np.arange(0, 60, 0.01), np.arange(70, 130, 0.01)]
+    y = lfilter([1.0], [1.0, -0.8], np.random.default_rng(2).standard_normal(len(t)))
+    path = tmp_path / "gappy.csv"
+    pd.DataFrame({"time": t, "gyro": y}).to_csv(path, index=False)
+    code, _, err = _run(["fit", path, "--column", "gyro", "--out", tmp_path / "m.json"], capsys)
+    assert code == 2 and "pass --fill" in err
+    code, _, err = _run(["fit", path, "--column", "gyro", "--segments", "--out",
+                         tmp_path / "m.json"], capsys)
+    assert code == 0, err
+    assert "kept as 2 contiguous segments of 6000, 6000 samples" in err
+    code, _, err = _run(["predict", path, "--model", tmp_path / "m.json", "--segments",
+                         "--out", tmp_path / "p.csv"], capsys)
+    assert code == 0, err
+    assert pd.read_csv(tmp_path / "p.csv")["prediction"].isna().sum() == 2 * 10
+    code, _, err = _run(["study", path, "--column", "gyro", "--sensor", "gyro", "--units",
+                         "deg/s", "--segments", "--out", tmp_path / "s"], capsys)
+    assert code == 2 and "needs a contiguous record" in err and not (tmp_path / "s").exists()
+    code, _, err = _run(["fit", path, "--column", "gyro", "--fill", "--out",
+                         tmp_path / "m2.json"], capsys)
+    assert code == 0 and "filled by linear interpolation (1000 samples added" in err

@@ -329,3 +329,38 @@ def _write(tmp_path, columns):
 
 
 # --- the loader options on the command line ---------------------------------------------------
+
+
+def _gappy(tmp_path):
+    t = np.r_[np.arange(0, 1, 0.01), np.arange(1.5, 3, 0.01)]
+    x = np.sin(3 * t)
+    path = tmp_path / "gappy.csv"
+    pd.DataFrame({"time": t, "x": x}).to_csv(path, index=False)
+    return path, t, x
+
+
+def test_gaps_are_refused_with_both_ways_out(tmp_path):
+    p, _, _ = _gappy(tmp_path)
+    with pytest.raises(InputError, match="line 102: a gap of 0.51 s.*pass --fill to interpolate "
+                                         "across them or --segments to fit on the pieces"):
+        load_record(p)
+
+
+def test_gaps_filled_by_interpolation(tmp_path):
+    p, t, x = _gappy(tmp_path)
+    rec = load_record(p, gaps="fill")
+    assert rec.n_samples == 300 and rec.rate == pytest.approx(100) and rec.segments is None
+    np.testing.assert_allclose(rec.time, np.arange(300) * 0.01, atol=1e-12)
+    np.testing.assert_allclose(rec.column("x"), np.interp(rec.time, t, x))
+    assert "1 gap(s), first at line 102; filled by linear interpolation (50 samples added" in (
+        rec.notes[0])
+
+
+def test_gaps_kept_as_segments(tmp_path):
+    p, t, x = _gappy(tmp_path)
+    rec = load_record(p, gaps="segments")
+    assert rec.n_samples == 250 and rec.segments == [slice(0, 100), slice(100, 250)]
+    np.testing.assert_array_equal(rec.column("x"), x)
+    with pytest.raises(InputError, match="needs a contiguous record, this one has 2 segments"):
+        rec.require_contiguous("the study")
+    load_record(p, gaps="fill").require_contiguous("the study")  # fine

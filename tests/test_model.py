@@ -336,3 +336,30 @@ def test_greedy_search_limit_on_coherent_sparse_ar():
     fitted = dict(zip(bic.terms_, bic.coef_))
     for term, coef in truth.items():
         assert fitted[term] == pytest.approx(coef, rel=0.02)
+
+
+def test_fit_on_segments_pools_windows_without_crossing_gaps():
+    rng = np.random.default_rng(11)
+    pieces = [lfilter([1.0], [1.0, -1.2, 0.5], rng.standard_normal(n)) + 3.0
+              for n in (700, 40, 900)]
+    y = np.concatenate(pieces)
+    runs = [slice(0, 700), slice(700, 740), slice(740, 1640)]
+    model = FOSModel(max_lag=4, stop="max_terms", max_terms=3).fit(y, segments=runs)
+    ref = FOSModel(max_lag=4, stop="max_terms", max_terms=3, correlations="reference").fit(
+        y, segments=runs)
+    assert model.terms_ == ref.terms_
+    np.testing.assert_allclose(model.coef_, ref.coef_, rtol=1e-9)
+    # least squares on the stacked windows: no row uses a lag from across a gap
+    terms = [Term.parse(t) for t in model.terms_]
+    yc = y - model.offsets_["y"]
+    X = np.vstack([evaluate_terms(terms, {"y": yc[s]}, 4) for s in runs])
+    target = np.concatenate([yc[s][4:] for s in runs])
+    sol, *_ = np.linalg.lstsq(np.column_stack([np.ones(len(X)), X]), target, rcond=None)
+    np.testing.assert_allclose(model.coef_, sol[1:], rtol=1e-9)
+    assert model.n_samples_ == len(target)
+    pred = model.predict(y, segments=runs)
+    for s in runs:
+        assert np.all(np.isnan(pred[s.start : s.start + 4]))
+        assert np.all(np.isfinite(pred[s.start + 4 : s.stop]))
+    with pytest.raises(InputError, match="ordered, non-overlapping"):
+        model.predict(y, segments=[slice(0, 800), slice(700, 900)])
