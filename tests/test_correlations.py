@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from fosmodel import correlations
 from fosmodel.candidates import CandidateSpec, evaluate_terms, generate_terms
 from fosmodel.correlations import LagCorrelations
 from fosmodel.fos import _DataCorrelations
@@ -51,6 +52,27 @@ def test_fast_path_matches_reference(spec, table_degree, n):
     _assert_close(fast.diag, ref.diag, scale)
     for j in range(len(terms)):
         _assert_close(fast.column(j), ref.column(j), scale)
+
+
+@pytest.mark.parametrize("spec", [SPECS[1], SPECS[4]], ids=lambda s: f"L{s.max_lag}CP{s.degree}")
+def test_blocked_weighted_gram_matches_reference(spec, monkeypatch):
+    # long records take the blocked weighted Gram path: force it on a short one, with blocks
+    # of a few samples so that block edges fall everywhere
+    monkeypatch.setattr(correlations, "_GEMM_SAMPLES", 0)
+    monkeypatch.setattr(correlations, "_CHUNK", 37)
+    signals = _signals(400, 3)
+    terms = [t for t in generate_terms(spec) if not t.is_constant]
+    n0 = spec.lag_window
+    fast = LagCorrelations(terms, signals, n0, table_degree=3)
+    ref = _DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
+    scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
+    calls = []
+    blocked = LagCorrelations._weighted_gram_sums
+    monkeypatch.setattr(LagCorrelations, "_weighted_gram_sums",
+                        lambda self, *args: calls.append(1) or blocked(self, *args))
+    for j in range(len(terms)):
+        _assert_close(fast.column(j), ref.column(j), scale)
+    assert calls  # the blocked path did run
 
 
 def test_window_shorter_than_signal_start_uses_only_window_samples():
