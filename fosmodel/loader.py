@@ -31,11 +31,13 @@ dropped (``outliers``).
 from __future__ import annotations
 
 import bz2
+import contextlib
 import csv
 import gzip
 import itertools
 import lzma
 import re
+import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -60,6 +62,11 @@ _RATE_KEYS = frozenset({"fs", "rate", "samplerate", "samplingrate", "samplefrequ
 _BURSTY_MIN_SAMPLES = 100
 _SHOWN = 5  # positions listed in a note
 _OPENERS = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
+_NOT_REAL = {"c": "complex numbers", "M": "dates", "m": "time spans"}  # by numpy dtype kind
+#: Larger values overflow the sums of products the models form (degree 4 and more).
+_MAX_ABS = 1e30
+#: Sample rates outside this range (Hz) are a unit mistake, not a sensor.
+_RATE_RANGE = (1e-6, 1e9)
 
 
 @dataclass
@@ -181,15 +188,18 @@ def load_record(
     Raises
     ------
     InputError
-        Missing or empty file, no data rows, a non-numeric or non-finite cell,
-        a bad preamble rate or scale, a time column that is not strictly
+        Missing, empty or damaged file, a header naming a column twice, no data
+        rows, a non-numeric or non-finite cell, a value beyond ``_MAX_ABS`` (after
+        scaling), a bad preamble rate or scale, a time column that is not strictly
         increasing or not uniform (a bursty one without ``uniform``), a rate
-        that disagrees with it, or a drop of samples from a record without time.
+        outside ``_RATE_RANGE`` or that disagrees with it, or a drop of samples
+        from a record without time.
     """
     path = Path(path)
     src = str(path)
-    if rate is not None and not (np.isfinite(rate) and rate > 0):
-        raise InputError(f"the sample rate must be a positive number of Hz, got {rate!r}")
+    if rate is not None and not _RATE_RANGE[0] <= rate <= _RATE_RANGE[1]:
+        raise InputError(f"the sample rate must be a positive number of Hz, from "
+                         f"{_RATE_RANGE[0]:g} to {_RATE_RANGE[1]:g}, got {rate!r}")
     if outliers not in OUTLIER_MODES:
         raise InputError(f"outliers must be one of {', '.join(OUTLIER_MODES)}, got {outliers!r}")
     if gaps not in GAP_MODES:
@@ -203,6 +213,7 @@ def load_record(
     notes: list[str] = []
     rate, given_by, metadata = _preamble_rate(preamble, rate, src, notes)
     _apply_scale(data, scale or {}, src, notes)
+    _check_magnitude(data, scale or {}, src, first_line)
     time_name = next((c for c in TIME_COLUMNS if c in data), None)
     time = data.pop(time_name) if time_name else None
     if not data:
@@ -281,7 +292,10 @@ def _find_preamble(path: Path) -> _Preamble:
     header of three or more columns, say), or when no such header is found, the
     header is the first line and the usual checks report what is wrong.
     """
-    rows = list(csv.reader(_head_lines(path, _PREAMBLE_MAX_LINES + 1), skipinitialspace=True))
+    try:
+        rows = list(csv.reader(_head_lines(path, _PREAMBLE_MAX_LINES + 1), skipinitialspace=True))
+    except csv.Error:  # a field over the csv module's limit, say: pandas says what is wrong
+        return _Preamble(0, [])
     header = next((i for i in range(len(rows) - 1)
                    if _is_names(rows[i]) and _is_numbers(rows[i + 1], len(rows[i]))), 0)
     before = rows[:header]
@@ -317,25 +331,61 @@ def _is_numbers(row: list[str], width: int) -> bool:
 
 
 def _read_csv(path: Path, skip: int) -> pd.DataFrame:
+    """The frame under the header on line ``skip + 1``.
+
+    ``index_col=False``: a first data row longer than the header is an error,
+    never a silent shift of the columns onto an index.
+    """
+    options = {"sep": ",", "skipinitialspace": True, "skiprows": skip}
     try:
-        frame = pd.read_csv(path, sep=",", skipinitialspace=True, low_memory=False,
-                            skiprows=skip)
+        names = pd.read_csv(path, header=None, nrows=1, dtype=str, keep_default_na=False,
+                            **options).iloc[0].tolist()  # as written: pandas renames a repeat
+        _check_header(path, skip, names)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", pd.errors.ParserWarning)
+            frame = pd.read_csv(path, low_memory=False, index_col=False, **options)
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: the file is empty") from None
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+    except pd.errors.ParserWarning:
+        raise InputError(f"{path}: line {skip + 2} has more fields than the header on line "
+                         f"{skip + 1} has names") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: {_non_utf8_line(path)}not UTF-8 text; save the file as "
+                         "UTF-8") from None
+    except (pd.errors.ParserError, OSError, EOFError, lzma.LZMAError) as exc:
         raise InputError(f"{path}: not a readable CSV file ({_first_line(exc)})") from None
-    if frame.shape[1] == 1:
-        header = str(frame.columns[0])
-        for sep, label in ((";", "semicolons"), ("\t", "tabs"), ("|", "bars")):
-            if sep in header:
-                raise InputError(
-                    f"{path}: the header {header!r} looks separated by {label}; "
-                    "fosmodel reads comma-separated files"
-                )
     unnamed = [c for c in frame.columns if str(c).startswith("Unnamed:")]
     if unnamed:
         raise InputError(f"{path}: column {frame.columns.get_loc(unnamed[0]) + 1} has no name")
     return frame
+
+
+def _check_header(path: Path, skip: int, names: list[str]) -> None:
+    """Refuse a header separated by another delimiter, or naming a column twice."""
+    if len(names) == 1:
+        for sep, label in ((";", "semicolons"), ("\t", "tabs"), ("|", "bars")):
+            if sep in names[0]:
+                raise InputError(
+                    f"{path}: the header {names[0]!r} looks separated by {label}; "
+                    "fosmodel reads comma-separated files"
+                )
+    twice = [i + 1 for i, name in enumerate(names) if name and names.count(name) > 1]
+    if twice:
+        raise InputError(f"{path}: line {skip + 1}: column name {names[twice[0] - 1]!r} appears "
+                         f"{len(twice)} times in the header (columns "
+                         f"{', '.join(map(str, twice))}); names must be unique")
+
+
+def _non_utf8_line(path: Path) -> str:
+    """``"line N: "`` for the first line of ``path`` that is not UTF-8 text, if it can be read."""
+    with contextlib.suppress(OSError, EOFError, lzma.LZMAError):  # damaged: no line to name
+        with _OPENERS.get(path.suffix.lower(), open)(path, "rb") as fh:
+            for number, line in enumerate(fh, 1):
+                try:
+                    line.decode("utf-8")
+                except UnicodeDecodeError:
+                    return f"line {number}: "
+    return ""
 
 
 def _read_npy(path: Path) -> pd.DataFrame:
@@ -343,7 +393,12 @@ def _read_npy(path: Path) -> pd.DataFrame:
         arr = np.load(path, allow_pickle=False)
     except (ValueError, OSError) as exc:
         raise InputError(f"{path}: not a readable .npy file ({_first_line(exc)})") from None
+    if not isinstance(arr, np.ndarray):  # np.load opens an .npz archive whatever its name
+        raise InputError(f"{path}: an .npz archive, not a .npy array")
     if arr.dtype.names:
+        if arr.ndim != 1 or any(arr.dtype[name].shape for name in arr.dtype.names):
+            raise InputError(f"{path}: a structured .npy record must be 1-D with one number per "
+                             f"field, got shape {arr.shape} of {arr.dtype}")
         return pd.DataFrame({name: arr[name] for name in arr.dtype.names})
     if arr.ndim == 1:
         arr = arr[:, None]
@@ -376,6 +431,10 @@ def _where(i: int, first_line: int) -> str:
 
 def _numeric(col: pd.Series, src: str, name: str, first_line: int) -> np.ndarray:
     """The column as finite float64, or an error naming the first bad row."""
+    kind = _NOT_REAL.get(col.dtype.kind)
+    if kind:
+        raise InputError(f"{src}: column {name!r} holds {kind} ({col.dtype}); fosmodel reads real "
+                         "numbers (time in seconds)")
     if not (pd.api.types.is_numeric_dtype(col) and not pd.api.types.is_bool_dtype(col)):
         values = pd.to_numeric(col, errors="coerce")
         bad = np.flatnonzero(values.isna().to_numpy() & col.notna().to_numpy())
@@ -413,9 +472,10 @@ def _preamble_rate(
     if at is not None:
         line, key, value = preamble.entries[at]
         found = _factor(value)
-        if found is None or found < 0:
+        if found is None or not _RATE_RANGE[0] <= found <= _RATE_RANGE[1]:
             raise InputError(f"{src}: line {line}: the preamble sample rate {key},{value} is not "
-                             "a positive number of Hz")
+                             f"a positive number of Hz from {_RATE_RANGE[0]:g} to "
+                             f"{_RATE_RANGE[1]:g}")
         here = f"the preamble's {key},{value} (line {line})"
         if rate is not None and abs(found - rate) > _RATE_TOLERANCE * rate:
             raise InputError(f"{src}: {given_by} disagrees with {here}")
@@ -436,9 +496,23 @@ def _apply_scale(data: dict[str, np.ndarray], scale: Mapping[str, float], src: s
         if not (np.isfinite(factor) and factor != 0):
             raise InputError(f"{src}: --scale {name}={factor!r}: the factor must be finite and "
                              "non-zero")
-        data[name] = data[name] * factor
+        with np.errstate(over="ignore"):  # an overflow is reported by _check_magnitude
+            data[name] = data[name] * factor
     if scale:
         notes.append("scaled " + ", ".join(f"{n} by {f:.6g}" for n, f in scale.items()))
+
+
+def _check_magnitude(data: dict[str, np.ndarray], scale: Mapping[str, float], src: str,
+                     first_line: int) -> None:
+    """Refuse values beyond ``_MAX_ABS`` (after scaling): the models' sums would overflow."""
+    for name, x in data.items():
+        bad = np.flatnonzero(np.abs(x) > _MAX_ABS)
+        if bad.size:
+            i = int(bad[0])
+            scaled = f" (scaled by {scale[name]:g})" if name in scale else ""
+            raise InputError(f"{src}: column {name!r}, {_where(i, first_line)}: {x[i]:g}{scaled} "
+                             f"is too large to model (over {_MAX_ABS:g} in magnitude); check its "
+                             f"units or pass --scale {name}=FACTOR")
 
 
 def _note_integer_columns(data: dict[str, np.ndarray], scale: Mapping[str, float],
@@ -467,9 +541,14 @@ def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: boo
     _check_order(time, dt, src, name, first_line, repeats_allowed=bursty)
     if not (bursty or uniform or gaps != "refuse"):
         _check_gaps(dt, src, name, first_line)
-    measured = (len(time) - 1) / (time[-1] - time[0])  # uniform: the span is the best estimate
-    if gaps != "refuse" and not (bursty or uniform):
-        measured = 1.0 / float(np.median(dt))  # with gaps, the span would count them
+    with np.errstate(over="ignore"):  # a span of a few subnormal seconds: checked below
+        measured = (len(time) - 1) / (time[-1] - time[0])  # uniform: the span is the best one
+        if gaps != "refuse" and not (bursty or uniform):
+            measured = 1.0 / float(np.median(dt))  # with gaps, the span would count them
+    if not _RATE_RANGE[0] <= measured <= _RATE_RANGE[1]:
+        raise InputError(f"{src}: column {name!r} gives a sample rate of {measured:.6g} Hz, "
+                         f"outside {_RATE_RANGE[0]:g} to {_RATE_RANGE[1]:g} Hz; is it in seconds? "
+                         f"(--scale {name}=0.001 turns milliseconds into seconds)")
     kind = "the effective rate of the bursty time column" if bursty else "the time column"
     if rate is not None and abs(measured - rate) > _RATE_TOLERANCE * rate:
         raise InputError(f"{src}: {given_by} disagrees with {kind} ({measured:.6g} Hz)")
@@ -540,7 +619,7 @@ def _check_order(time, dt, src, name, first_line, *, repeats_allowed: bool) -> N
         i = int(bad[0]) + 1
         kind = "repeats" if dt[bad[0]] == 0 else "goes backwards"
         raise InputError(f"{src}: column {name!r}, {_where(i, first_line)}: time {kind} "
-                         f"({time[i - 1]!r} then {time[i]!r})")
+                         f"({float(time[i - 1])!r} then {float(time[i])!r})")
 
 
 def _check_gaps(dt, src, name, first_line) -> None:
