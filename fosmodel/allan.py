@@ -255,10 +255,18 @@ def _noise_types(y: np.ndarray, ms: np.ndarray) -> np.ndarray:
 
 
 def _identify(y: np.ndarray, m: int) -> int:
-    """Noise type from the lag-1 autocorrelation of at most ``ID_AVERAGES[1]`` m-averages."""
+    """Noise type from the lag-1 autocorrelation of at most ``ID_AVERAGES[1]`` m-averages.
+
+    White frequency noise (0) where that is undefined: averages without
+    variation, as on a record that is constant in stretches.
+    """
     k = min(len(y) // m, ID_AVERAGES[1])
-    alpha = allantools.autocorr_noise_id(y[: k * m], m, data_type="freq")[0]
-    return int(np.clip(alpha, -2, 2))
+    try:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            alpha = allantools.autocorr_noise_id(y[: k * m], m, data_type="freq")[0]
+    except ValueError:  # allantools' int(NaN) on an undefined autocorrelation
+        return 0
+    return int(np.clip(alpha, -2, 2)) if np.isfinite(alpha) else 0
 
 
 def _basis(taus: np.ndarray, terms: tuple[str, ...]) -> np.ndarray:

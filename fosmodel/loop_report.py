@@ -113,10 +113,13 @@ def _block_means(time: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def _binned(x: np.ndarray, r: np.ndarray, bins: int = 20) -> tuple[np.ndarray, np.ndarray]:
-    edges = np.quantile(x, np.linspace(0, 1, bins + 1))
-    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
-    centres = np.array([x[idx == b].mean() for b in range(bins)])
-    return centres, np.array([r[idx == b].mean() for b in range(bins)])
+    """Mean of ``r`` in quantile bins of ``x``; a quantised ``x`` repeats edges, whose bins drop."""
+    edges = np.unique(np.quantile(x, np.linspace(0, 1, bins + 1)))
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, max(len(edges) - 2, 0))
+    count = np.bincount(idx)
+    kept = count > 0
+    centres = np.bincount(idx, weights=x)[kept] / count[kept]
+    return centres, np.bincount(idx, weights=r)[kept] / count[kept]
 
 
 def _fired_text(result: LoopResult) -> str:

@@ -429,3 +429,12 @@ def test_cli_unknown_column_exit_2(tmp_path, capsys):
     code, _, err = _run(["allan", _csv(tmp_path), "--column", "gyro", "--out", tmp_path / "o"],
                         capsys)
     assert code == 2 and "did you mean 'gyro_y'" in err
+
+
+def test_step_record_with_undefined_noise_id_still_gives_adev_and_fit():
+    # constant stretches leave the lag-1 autocorrelation undefined (allantools raises on it):
+    # the noise id falls back to white FM and the analysis completes
+    y = np.r_[np.zeros(1500), np.ones(1500)]
+    result = allan_deviation(y, 100.0)
+    assert np.isfinite(result.adev).all() and np.isfinite(result.lower).all()
+    assert fit_noise(result).coefficients["K"] > 0  # a step looks like a rate random walk
