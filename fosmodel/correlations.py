@@ -27,8 +27,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
-from threadpoolctl import threadpool_limits
 
+from .blas import one_blas_thread
 from .candidates import OUTPUT, Term
 
 _BLOCK = 16  # most linear candidates whose Gram columns are tabulated at once
@@ -364,7 +364,7 @@ class LagCorrelations:
         index = index.reshape(-1, 2)
         gram = np.zeros((len(factors), len(factors)))
         n0, n = self._n0, self._n
-        with threadpool_limits(1, user_api="blas"):  # threads only slow products this small
+        with one_blas_thread():  # threads only slow products this small
             for lo in range(n0, n, _CHUNK):
                 hi = min(lo + _CHUNK, n)
                 x = np.stack([self._factor(c, k, lo, hi) for c, k in factors.tolist()])

@@ -23,6 +23,7 @@ import pandas as pd
 from sklearn.base import BaseEstimator
 
 from . import __version__
+from .blas import one_blas_thread
 from .candidates import (
     OUTPUT,
     CandidateSpec,
@@ -199,13 +200,17 @@ class FOSModel(BaseEstimator):
         terms = [t for t in generate_terms(spec) if not t.is_constant]
         pieces = [{k: v[s] for k, v in signals.items()} for s in runs]
         if self.correlations == "fast":
-            parts = [LagCorrelations(terms, piece, n0) for piece in pieces]
-            corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
+            with one_blas_thread():  # short products: threads cost more than they give
+                parts = [LagCorrelations(terms, piece, n0) for piece in pieces]
+                corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
+                res = _fos_kernel(corr, rule, intercept=True,
+                                  dependence_tol=self.dependence_tol)
         else:
+            blocks = [evaluate_terms(terms, piece, n0) for piece in pieces]
             corr = _DataCorrelations(
-                np.vstack([evaluate_terms(terms, piece, n0) for piece in pieces]),
+                blocks[0] if len(blocks) == 1 else np.vstack(blocks),
                 np.concatenate([piece[OUTPUT][n0:] for piece in pieces]))
-        res = _fos_kernel(corr, rule, intercept=True, dependence_tol=self.dependence_tol)
+            res = _fos_kernel(corr, rule, intercept=True, dependence_tol=self.dependence_tol)
 
         self.spec_ = spec
         self._terms = [terms[i] for i in res.support]
