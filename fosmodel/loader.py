@@ -38,7 +38,7 @@ import itertools
 import lzma
 import re
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
@@ -67,6 +67,8 @@ _NOT_REAL = {"c": "complex numbers", "M": "dates", "m": "time spans"}  # by nump
 _MAX_ABS = 1e30
 #: Sample rates outside this range (Hz) are a unit mistake, not a sensor.
 _RATE_RANGE = (1e-6, 1e9)
+#: Rows per block read from a file: a long record is converted block by block.
+CHUNK_ROWS = 500_000
 
 
 @dataclass
@@ -147,6 +149,7 @@ class _Outliers(NamedTuple):
 def load_record(
     path: str | Path,
     *,
+    columns: Sequence[str] | None = None,
     rate: float | None = None,
     scale: Mapping[str, float] | None = None,
     uniform: bool = False,
@@ -159,6 +162,12 @@ def load_record(
     ----------
     path : str or Path
         CSV (optionally compressed), ``.npy`` or ``.parquet`` file.
+    columns : sequence of str, optional
+        Keep only these columns (with the time column and the columns named in
+        ``scale``); the others are neither converted nor kept.  Files are read
+        in blocks of ``CHUNK_ROWS`` rows (a ``.npy`` file memory-mapped), so
+        memory holds the kept columns as float64 and one block, whatever the
+        file's width.  A name the file lacks is an error.
     rate : float, optional
         Sample rate in Hz.  Required when the file has neither a time column
         nor a preamble rate; checked against them when it has.
@@ -188,7 +197,8 @@ def load_record(
     Raises
     ------
     InputError
-        Missing, empty or damaged file, a header naming a column twice, no data
+        Missing, empty or damaged file, a header naming a column twice, a
+        column asked for that the file lacks, no data
         rows, a non-numeric or non-finite cell, a value beyond ``_MAX_ABS`` (after
         scaling), a bad preamble rate or scale, a time column that is not strictly
         increasing or not uniform (a bursty one without ``uniform``), a rate
@@ -204,12 +214,13 @@ def load_record(
         raise InputError(f"outliers must be one of {', '.join(OUTLIER_MODES)}, got {outliers!r}")
     if gaps not in GAP_MODES:
         raise InputError(f"gaps must be one of {', '.join(GAP_MODES)}, got {gaps!r}")
-    frame, first_line, preamble = _read(path)
-    if frame.shape[1] == 0:
+    names, first_line, preamble = _header(path)
+    if not names:
         raise InputError(f"{src}: no columns")
-    if len(frame) == 0:
+    keep = _kept(names, columns, scale or {}, src)
+    data = _convert(_blocks(path, preamble.header_index, names, keep), src, first_line)
+    if not len(next(iter(data.values()))):
         raise InputError(f"{src}: header only, no data rows")
-    data = {str(c): _numeric(frame[c], src, str(c), first_line) for c in frame.columns}
     notes: list[str] = []
     rate, given_by, metadata = _preamble_rate(preamble, rate, src, notes)
     _apply_scale(data, scale or {}, src, notes)
@@ -269,19 +280,63 @@ def _factor(text: str) -> float | None:
     return value if np.isfinite(value) and value != 0 else None
 
 
-def _read(path: Path) -> tuple[pd.DataFrame, int, _Preamble]:
-    """The raw frame, the file line of its first row (0 if rows, not lines) and the preamble."""
+def _header(path: Path) -> tuple[list[str], int, _Preamble]:
+    """Column names, the file line of the first data row (0 if rows, not lines), the preamble."""
     if not path.is_file():
         raise InputError(f"{path}: no such file")
     if path.stat().st_size == 0:
         raise InputError(f"{path}: the file is empty")
-    suffix = "".join(path.suffixes[-2:]).lower()
-    if suffix.endswith(".npy"):
-        return _read_npy(path), 0, _Preamble(0, [])
-    if suffix.endswith(".parquet"):
-        return _read_parquet(path), 0, _Preamble(0, [])
+    kind = _kind(path)
+    if kind == "npy":
+        return _npy_names(_open_npy(path), path), 0, _Preamble(0, [])
+    if kind == "parquet":
+        return _parquet_file(path).schema_arrow.names, 0, _Preamble(0, [])
     preamble = _find_preamble(path)
-    return _read_csv(path, preamble.header_index), preamble.header_index + 2, preamble
+    return _csv_names(path, preamble.header_index), preamble.header_index + 2, preamble
+
+
+def _kind(path: Path) -> str:
+    suffix = "".join(path.suffixes[-2:]).lower()
+    return next((k for k in ("npy", "parquet") if suffix.endswith("." + k)), "csv")
+
+
+def _kept(names: list[str], columns: Sequence[str] | None, scale: Mapping[str, float],
+          src: str) -> list[str] | None:
+    """The columns to read (None: all): those asked for, the time and the scaled ones."""
+    if columns is None:
+        return None
+    missing = [c for c in columns if c not in names]
+    if missing:
+        shown = [n for n in names if n not in TIME_COLUMNS]
+        raise InputError(f"{src}: no column {missing[0]!r}{did_you_mean(missing[0], shown)}; "
+                         f"columns: {', '.join(shown)}")
+    wanted = {*columns, *scale, *TIME_COLUMNS}
+    return [n for n in names if n in wanted]
+
+
+def _blocks(path: Path, skip: int, names: list[str],
+            keep: list[str] | None) -> Iterator[pd.DataFrame]:
+    """The kept columns, ``CHUNK_ROWS`` rows at a time."""
+    kind = _kind(path)
+    if kind == "npy":
+        return _npy_blocks(_open_npy(path), names, keep)
+    if kind == "parquet":
+        return _parquet_blocks(path, keep)
+    return _csv_blocks(path, skip, keep)
+
+
+def _convert(blocks: Iterator[pd.DataFrame], src: str, first_line: int) -> dict[str, np.ndarray]:
+    """Concatenate the blocks' columns as finite float64, or an error naming the first bad cell."""
+    parts: dict[str, list[np.ndarray]] = {}
+    offset = 0
+    for block in blocks:
+        for c in block.columns:
+            parts.setdefault(str(c), []).append(_numeric(block[c], src, str(c), first_line, offset))
+        offset += len(block)
+    data = {name: np.concatenate(p) if len(p) > 1 else p[0] for name, p in parts.items()}
+    for name, arr in data.items():
+        _check_finite(arr, src, name, first_line)
+    return data
 
 
 def _find_preamble(path: Path) -> _Preamble:
@@ -330,34 +385,54 @@ def _is_numbers(row: list[str], width: int) -> bool:
     return len(row) == width and all(_is_number(c) for c in row)
 
 
-def _read_csv(path: Path, skip: int) -> pd.DataFrame:
-    """The frame under the header on line ``skip + 1``.
+_CSV_OPTIONS = {"sep": ",", "skipinitialspace": True}
+
+
+def _csv_names(path: Path, skip: int) -> list[str]:
+    """The header on line ``skip + 1``, as written (pandas would rename a repeated name)."""
+    try:
+        names = pd.read_csv(path, header=None, nrows=1, dtype=str, keep_default_na=False,
+                            skiprows=skip, **_CSV_OPTIONS).iloc[0].tolist()
+    except Exception as exc:  # noqa: BLE001 - one message for every way a read can fail
+        raise _csv_error(path, skip, exc) from None
+    _check_header(path, skip, names)
+    unnamed = [i for i, n in enumerate(names) if not str(n).strip()]
+    if unnamed:
+        raise InputError(f"{path}: column {unnamed[0] + 1} has no name")
+    return [str(n) for n in names]
+
+
+def _csv_blocks(path: Path, skip: int, keep: list[str] | None) -> Iterator[pd.DataFrame]:
+    """The rows under the header, in blocks.
 
     ``index_col=False``: a first data row longer than the header is an error,
     never a silent shift of the columns onto an index.
     """
-    options = {"sep": ",", "skipinitialspace": True, "skiprows": skip}
     try:
-        names = pd.read_csv(path, header=None, nrows=1, dtype=str, keep_default_na=False,
-                            **options).iloc[0].tolist()  # as written: pandas renames a repeat
-        _check_header(path, skip, names)
         with warnings.catch_warnings():
             warnings.simplefilter("error", pd.errors.ParserWarning)
-            frame = pd.read_csv(path, low_memory=False, index_col=False, **options)
-    except pd.errors.EmptyDataError:
-        raise InputError(f"{path}: the file is empty") from None
-    except pd.errors.ParserWarning:
-        raise InputError(f"{path}: line {skip + 2} has more fields than the header on line "
-                         f"{skip + 1} has names") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: {_non_utf8_line(path)}not UTF-8 text; save the file as "
-                         "UTF-8") from None
-    except (pd.errors.ParserError, OSError, EOFError, lzma.LZMAError) as exc:
-        raise InputError(f"{path}: not a readable CSV file ({_first_line(exc)})") from None
-    unnamed = [c for c in frame.columns if str(c).startswith("Unnamed:")]
-    if unnamed:
-        raise InputError(f"{path}: column {frame.columns.get_loc(unnamed[0]) + 1} has no name")
-    return frame
+            with pd.read_csv(path, low_memory=False, index_col=False, skiprows=skip,
+                             usecols=keep, chunksize=CHUNK_ROWS, **_CSV_OPTIONS) as reader:
+                yield from reader
+    except Exception as exc:  # noqa: BLE001 - one message for every way a read can fail
+        raise _csv_error(path, skip, exc) from None
+
+
+def _csv_error(path: Path, skip: int, exc: Exception) -> Exception:
+    """The InputError for a failed CSV read (other exceptions pass through)."""
+    if isinstance(exc, InputError):
+        return exc
+    if isinstance(exc, pd.errors.EmptyDataError):
+        return InputError(f"{path}: the file is empty")
+    if isinstance(exc, pd.errors.ParserWarning):
+        return InputError(f"{path}: line {skip + 2} has more fields than the header on line "
+                          f"{skip + 1} has names")
+    if isinstance(exc, UnicodeDecodeError):
+        return InputError(f"{path}: {_non_utf8_line(path)}not UTF-8 text; save the file as "
+                          "UTF-8")
+    if isinstance(exc, (pd.errors.ParserError, OSError, EOFError, lzma.LZMAError)):
+        return InputError(f"{path}: not a readable CSV file ({_first_line(exc)})")
+    return exc
 
 
 def _check_header(path: Path, skip: int, names: list[str]) -> None:
@@ -388,35 +463,66 @@ def _non_utf8_line(path: Path) -> str:
     return ""
 
 
-def _read_npy(path: Path) -> pd.DataFrame:
+def _open_npy(path: Path) -> np.ndarray:
+    """The array, memory-mapped: blocks are read from it as they are converted."""
     try:
-        arr = np.load(path, allow_pickle=False)
+        arr = np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError) as exc:
         raise InputError(f"{path}: not a readable .npy file ({_first_line(exc)})") from None
     if not isinstance(arr, np.ndarray):  # np.load opens an .npz archive whatever its name
         raise InputError(f"{path}: an .npz archive, not a .npy array")
+    return arr
+
+
+def _npy_names(arr: np.ndarray, path: Path) -> list[str]:
     if arr.dtype.names:
         if arr.ndim != 1 or any(arr.dtype[name].shape for name in arr.dtype.names):
             raise InputError(f"{path}: a structured .npy record must be 1-D with one number per "
                              f"field, got shape {arr.shape} of {arr.dtype}")
-        return pd.DataFrame({name: arr[name] for name in arr.dtype.names})
-    if arr.ndim == 1:
-        arr = arr[:, None]
-    if arr.ndim != 2:
+        return list(arr.dtype.names)
+    if arr.ndim not in (1, 2):
         raise InputError(f"{path}: a .npy record must be 1-D or 2-D, got shape {arr.shape}")
-    return pd.DataFrame(arr, columns=[f"c{i}" for i in range(arr.shape[1])])
+    return [f"c{i}" for i in range(1 if arr.ndim == 1 else arr.shape[1])]
 
 
-def _read_parquet(path: Path) -> pd.DataFrame:
+def _npy_blocks(arr: np.ndarray, names: list[str],
+                keep: list[str] | None) -> Iterator[pd.DataFrame]:
+    keep = names if keep is None else keep
+    for lo in range(0, len(arr), CHUNK_ROWS):
+        rows = arr[lo : lo + CHUNK_ROWS]
+        if arr.dtype.names:
+            yield pd.DataFrame({name: np.asarray(rows[name]) for name in keep})
+        else:
+            rows = rows.reshape(len(rows), -1)
+            yield pd.DataFrame({name: np.asarray(rows[:, names.index(name)]) for name in keep})
+    if not len(arr):
+        yield pd.DataFrame({name: np.empty(0) for name in keep})
+
+
+def _parquet_file(path: Path):
     try:
-        import pyarrow  # noqa: F401
+        import pyarrow.parquet as pq
     except ImportError:
         raise InputError(
             f"{path}: reading Parquet needs pyarrow: pip install 'fosmodel[parquet]'"
         ) from None
     try:
-        return pd.read_parquet(path)
-    except Exception as exc:  # pyarrow raises many types for a damaged file
+        return pq.ParquetFile(path)
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for a damaged file
+        raise InputError(f"{path}: not a readable Parquet file ({_first_line(exc)})") from None
+
+
+def _parquet_blocks(path: Path, keep: list[str] | None) -> Iterator[pd.DataFrame]:
+    file = _parquet_file(path)
+    try:
+        empty = True
+        for batch in file.iter_batches(batch_size=CHUNK_ROWS, columns=keep):
+            empty = False
+            yield batch.to_pandas()
+        if empty:
+            table = file.schema_arrow.empty_table()
+            yield table.select(keep or table.column_names).to_pandas()
+    except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for a damaged file
         raise InputError(f"{path}: not a readable Parquet file ({_first_line(exc)})") from None
 
 
@@ -429,8 +535,12 @@ def _where(i: int, first_line: int) -> str:
     return f"line {i + first_line}" if first_line else f"row {i}"
 
 
-def _numeric(col: pd.Series, src: str, name: str, first_line: int) -> np.ndarray:
-    """The column as finite float64, or an error naming the first bad row."""
+def _numeric(col: pd.Series, src: str, name: str, first_line: int, offset: int) -> np.ndarray:
+    """The block's column as float64, or an error naming its first cell that is not a number.
+
+    ``offset`` is the block's first sample.  Empty cells become NaN (reported by
+    :func:`_check_finite` once the whole column is read).
+    """
     kind = _NOT_REAL.get(col.dtype.kind)
     if kind:
         raise InputError(f"{src}: column {name!r} holds {kind} ({col.dtype}); fosmodel reads real "
@@ -441,11 +551,14 @@ def _numeric(col: pd.Series, src: str, name: str, first_line: int) -> np.ndarray
         if bad.size:
             i = int(bad[0])
             raise InputError(
-                f"{src}: column {name!r}, {_where(i, first_line)}: "
+                f"{src}: column {name!r}, {_where(i + offset, first_line)}: "
                 f"{str(col.iloc[i])!r} is not a number"
             )
         col = values
-    arr = col.to_numpy(dtype=float)
+    return col.to_numpy(dtype=float)
+
+
+def _check_finite(arr: np.ndarray, src: str, name: str, first_line: int) -> None:
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         i = int(bad[0])
@@ -454,7 +567,6 @@ def _numeric(col: pd.Series, src: str, name: str, first_line: int) -> np.ndarray
             f"{src}: column {name!r}, {_where(i, first_line)}: {kind} or NaN "
             f"({bad.size} such cell(s) in the column)"
         )
-    return arr
 
 
 def _preamble_rate(

@@ -6,6 +6,7 @@ import pytest
 from records import bursty_csv, spiky_csv
 
 from fosmodel.exceptions import InputError
+from fosmodel import loader
 from fosmodel.loader import load_record, parse_scales
 
 
@@ -364,3 +365,63 @@ def test_gaps_kept_as_segments(tmp_path):
     with pytest.raises(InputError, match="needs a contiguous record, this one has 2 segments"):
         rec.require_contiguous("the study")
     load_record(p, gaps="fill").require_contiguous("the study")  # fine
+
+
+def _wide(tmp_path, n=1000):
+    rng = np.random.default_rng(5)
+    frame = pd.DataFrame({"time": np.arange(n) / 100.0,
+                          **{f"c{i}": rng.standard_normal(n) for i in range(6)}})
+    frame.to_csv(tmp_path / "w.csv", index=False)
+    np.save(tmp_path / "w.npy", frame.to_numpy()[:, 1:])
+    frame.to_parquet(tmp_path / "w.parquet")
+    return frame
+
+
+@pytest.mark.parametrize("name", ["w.csv", "w.npy", "w.parquet"])
+def test_columns_read_in_blocks_equal_the_whole_read(tmp_path, monkeypatch, name):
+    frame = _wide(tmp_path)
+    whole = load_record(tmp_path / name, rate=None if name != "w.npy" else 100.0)
+    monkeypatch.setattr(loader, "CHUNK_ROWS", 64)  # 16 blocks, the last one short
+    part = load_record(tmp_path / name, columns=["c4", "c1"],
+                       rate=None if name != "w.npy" else 100.0)
+    assert part.names == ["c1", "c4"]  # file order, only those asked for
+    for c in part.names:
+        np.testing.assert_array_equal(part.column(c), whole.column(c))
+        np.testing.assert_array_equal(part.column(c), frame[c].to_numpy())
+    assert part.rate == pytest.approx(100.0)
+
+
+def test_a_bad_cell_in_a_later_block_names_its_line(tmp_path, monkeypatch):
+    _wide(tmp_path)
+    lines = (tmp_path / "w.csv").read_text().splitlines()
+    cells = lines[700].split(",")
+    cells[3] = "oops"  # column c2, file line 701
+    lines[700] = ",".join(cells)
+    cells = lines[900].split(",")
+    cells[4] = ""  # column c3, file line 901
+    lines[900] = ",".join(cells)
+    (tmp_path / "w.csv").write_text("\n".join(lines) + "\n")
+    monkeypatch.setattr(loader, "CHUNK_ROWS", 64)
+    with pytest.raises(InputError, match=r"column 'c2', line 701: 'oops' is not a number"):
+        load_record(tmp_path / "w.csv", columns=["c2"])
+    with pytest.raises(InputError, match=r"column 'c3', line 901: an empty cell or NaN \(1 such"):
+        load_record(tmp_path / "w.csv", columns=["c3"])
+    # the damaged columns are not read when not asked for
+    assert load_record(tmp_path / "w.csv", columns=["c0"]).names == ["c0"]
+
+
+@pytest.mark.parametrize("name", ["w.csv", "w.npy", "w.parquet"])
+def test_a_column_the_file_lacks_is_named_with_the_file_columns(tmp_path, name):
+    _wide(tmp_path)
+    with pytest.raises(InputError, match=r"no column 'c9'.*columns: c0, c1, c2, c3, c4, c5$"):
+        load_record(tmp_path / name, columns=["c9"], rate=100.0 if name == "w.npy" else None)
+
+
+def test_npy_is_memory_mapped(tmp_path, monkeypatch):
+    _wide(tmp_path)
+    modes = []
+    real_load = np.load
+    monkeypatch.setattr(np, "load", lambda *a, **k: modes.append(k.get("mmap_mode"))
+                        or real_load(*a, **k))
+    load_record(tmp_path / "w.npy", columns=["c0"], rate=100.0)
+    assert modes and set(modes) == {"r"}
