@@ -1,0 +1,72 @@
+"""Helpers shared by the benchmark scripts: the machine line and interleaved best-of timing.
+
+Not a benchmark itself.  The scripts import it as ``_common`` (``python
+benchmarks/<script>.py`` puts ``benchmarks/`` on the path).
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import time
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+
+def blas_info() -> str:
+    """The BLAS numpy uses and its thread count, from threadpoolctl (when installed)."""
+    try:
+        from threadpoolctl import threadpool_info
+    except ImportError:  # pragma: no cover - threadpoolctl comes with scikit-learn
+        return "BLAS unknown (threadpoolctl missing)"
+    pools = [p for p in threadpool_info() if p.get("user_api") == "blas"]
+    if not pools:
+        return "BLAS unknown"
+    return "; ".join(
+        f"{p.get('internal_api')} {p.get('version')} {os.path.basename(p.get('filepath', ''))} "
+        f"({p.get('architecture')}, {p.get('num_threads')} threads)" for p in pools)
+
+
+def limit_blas(threads: int | None):
+    """Limit numpy's BLAS to ``threads`` threads (None: leave it); keep the result referenced."""
+    if threads is None:
+        return None
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=threads, user_api="blas")
+
+
+def machine_line() -> str:
+    """One line naming the machine, the software and the BLAS threads, for every report."""
+    load = ", ".join(f"{x:.1f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
+    threads = os.environ.get("OPENBLAS_NUM_THREADS", "unset")  # the BLAS entry shows any limit
+    return (f"machine: {platform.platform()}, {os.cpu_count()} CPUs, load average {load}; "
+            f"Python {platform.python_version()}, numpy {np.__version__}; {blas_info()}; "
+            f"OPENBLAS_NUM_THREADS={threads}")
+
+
+def interleaved_best(
+    fns: Mapping[str, Callable[[], object]], repeats: int,
+    few: Mapping[str, int] | None = None,
+) -> dict[str, float]:
+    """Best wall time of each function, timed round-robin so that they share the machine's noise.
+
+    ``few`` caps the repeats of slow functions: ``{"frols": 3}`` times it only
+    in the first 3 rounds.
+    """
+    few = few or {}
+    best = dict.fromkeys(fns, np.inf)
+    for round_ in range(repeats):
+        for name, fn in fns.items():
+            if round_ >= few.get(name, repeats):
+                continue
+            t0 = time.perf_counter()
+            fn()
+            best[name] = min(best[name], time.perf_counter() - t0)
+    return best
+
+
+def loglog_slope(x, y) -> float:
+    """Least-squares slope of log(y) against log(x)."""
+    return float(np.polyfit(np.log(np.asarray(x, float)), np.log(np.asarray(y, float)), 1)[0])
