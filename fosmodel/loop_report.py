@@ -91,7 +91,7 @@ def residual_figure(result: LoopResult, title: str) -> Figure:
         ax.set_title(text, fontsize="medium")
         ax.grid(True, alpha=0.3)
         if ax.lines:
-            ax.legend(fontsize="x-small")
+            ax.legend(fontsize="x-small", loc="upper right")  # "best" is slow on long records
     axes[7].axis("off")
     axes[7].text(0, 1, _fired_text(result), va="top", family="monospace", fontsize="small")
     fig.suptitle(title)
