@@ -7,11 +7,18 @@ Exit codes: 0 success, 2 bad input or usage (one-line message on stderr),
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
+import math
+import os
+import re
+import shutil
 import sys
 import traceback
+import uuid
 from pathlib import Path
+from typing import TYPE_CHECKING, NamedTuple, NoReturn
 
 import numpy as np
 import pandas as pd
@@ -23,6 +30,9 @@ from .fos import STOP_RULES
 from .loader import OUTLIER_K, OUTLIER_MODES, Record, load_record, parse_scales
 from .model import FOSModel
 from .output import atomic_write, write_text
+
+if TYPE_CHECKING:
+    from .harness import StudyPlan, StudyResult
 
 log = logging.getLogger("fosmodel")
 
@@ -41,6 +51,16 @@ def _positive_float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
     if not np.isfinite(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
     return value
 
 
@@ -65,8 +85,10 @@ def _split_arg(text: str) -> tuple[float, float]:
     try:
         train, evaluate = (float(p) for p in text.split(","))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected TRAIN_S,EVALUATE_S (e.g. 180,180), got {text!r}"
-                                         ) from None
+        train = evaluate = math.nan
+    if not (math.isfinite(train) and math.isfinite(evaluate)):
+        raise argparse.ArgumentTypeError(f"expected TRAIN_S,EVALUATE_S, two finite seconds (e.g. "
+                                         f"180,180), got {text!r}")
     return train, evaluate
 
 
@@ -74,15 +96,28 @@ def _out_path(path: str) -> Path:
     out = Path(path)
     if not out.parent.is_dir():
         raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
+    if out.is_dir():
+        raise InputError(f"cannot write {out}: it is a directory")
     return out
 
 
-def _load(args: argparse.Namespace) -> Record:
-    """The record of ``args.file`` with the loader options; its notes go to stderr."""
-    rec = load_record(args.file, rate=args.rate, scale=parse_scales(args.scale or []),
+def _out_dir(path: str) -> Path:
+    """The output directory of a report: created on success, so it must not be a file."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"cannot write a report into {out}: it is a file, not a directory")
+    return out
+
+
+def _load(args: argparse.Namespace, path: str | None = None) -> Record:
+    """The record of ``path`` (default ``args.file``) with the loader options.
+
+    Its notes go to stderr, after the file's name when ``path`` is given.
+    """
+    rec = load_record(path or args.file, rate=args.rate, scale=parse_scales(args.scale or []),
                       uniform=args.uniform, outliers=args.outliers, gaps=args.gaps)
     for note in rec.notes:
-        print(f"fosmodel: note: {note}", file=sys.stderr)
+        print(f"fosmodel: note: {path + ': ' if path else ''}{note}", file=sys.stderr)
     return rec
 
 
@@ -109,6 +144,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     rec = _load(args)
     y = rec.column(args.column)
     exog_lags = dict(args.exog or [])
+    if args.column in exog_lags:
+        raise InputError(f"--exog {args.column}:{exog_lags[args.column]}: the modelled column "
+                         "cannot be its own input (its lag 0 is the value predicted; its past "
+                         "is in --max-lag)")
     model = FOSModel(max_lag=args.max_lag, degree=args.degree, exog_lags=exog_lags,
                      max_terms=args.max_terms, stop=args.stop, tol=args.tol)
     spec = model._spec()
@@ -125,18 +164,39 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
 
 def _read_model(path: str) -> FOSModel:
+    """The model saved in ``path``, checked down to its numbers and the column it names."""
     try:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise InputError(f"cannot read model {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a model file (not UTF-8 text)") from None
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise InputError(f"{path}: not a model file (invalid JSON at line {exc.lineno})") from None
+    except (ValueError, RecursionError) as exc:  # a number of 4300+ digits, nesting too deep
+        raise InputError(f"{path}: not a model file ({exc})") from None
     try:
-        return FOSModel.from_dict(data)
+        model = FOSModel.from_dict(data)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+    except (AttributeError, TypeError, ValueError, OverflowError) as exc:  # e.g. terms of numbers
+        raise InputError(f"{path}: corrupted model file: {type(exc).__name__}: {exc}") from None
+    _check_model(model, path)
+    return model
+
+
+def _check_model(model: FOSModel, path: str) -> None:
+    """Refuse a model whose weights are not finite or whose source column is not a name."""
+    numbers = [*model.coef_, model.intercept_, *model.offsets_.values()]
+    if not np.isfinite(numbers).all():
+        raise InputError(f"{path}: corrupted model file: a weight or offset is not a finite "
+                         "number")
+    column = model.meta_.get("column")
+    if column is not None and not isinstance(column, str):
+        raise InputError(f"{path}: corrupted model file: meta.column {column!r} is not a column "
+                         "name")
 
 
 def _cmd_predict(args: argparse.Namespace) -> int:
@@ -149,26 +209,63 @@ def _cmd_predict(args: argparse.Namespace) -> int:
     y = rec.column(column)
     channels = {name: rec.column(name) for name in [*model.spec_.exog_lags, *model.spec_.columns]}
     pred = model.predict(y, channels, segments=rec.segments)
+    resid = (y - pred)[~np.isnan(pred)]  # NaN over the lag window of each segment
+    if not resid.size:
+        pieces = f" in {len(rec.segments)} segments" if rec.segments else ""
+        raise InputError(f"{rec.source}: record too short: {rec.n_samples} samples{pieces}, but "
+                         f"the model's lag window needs {model.lag_window_} before the first "
+                         "prediction")
     frame = pd.DataFrame({column: y, "prediction": pred, "residual": y - pred})
     if rec.time is not None:
         frame.insert(0, "time", rec.time)
     with atomic_write(out) as fh:
         frame.to_csv(fh, index=False, float_format="%.10g")
-    resid = frame["residual"].to_numpy()[model.lag_window_:]
-    mse = float(np.mean(resid**2)) if resid.size else float("nan")
+    mse = float(np.mean(resid**2))
     print(f"one-step prediction of {column!r} on {rec.source}: {resid.size} samples, MSE {mse:.6g}")
     print(f"predictions written to {out}")
     return 0
 
 
-def _cmd_study(args: argparse.Namespace) -> int:
-    from .harness import StudyConfig, run_study
-    from .report import paper_table, write_study
+class _SensorRecord(NamedTuple):
+    """One column of one file in a study, with its plan and the name of its report."""
 
-    json_path = _out_path(args.json) if args.json else None
-    rec = _load(args)
+    file: str
+    column: str
+    name: str
+    plan: StudyPlan
+
+
+_COMPRESSED = (".gz", ".bz2", ".xz")
+
+
+def _report_name(path: str, column: str) -> str:
+    """``imu1_gx`` for column gx of ``imu1.csv(.gz)``: the subdirectory of its report."""
+    p = Path(path)
+    stem = Path(p.stem).stem if p.suffix in _COMPRESSED else p.stem
+    return re.sub(r"[^\w.-]+", "_", f"{stem}_{column}")
+
+
+def _check_report_names(files: list[str], columns: list[str]) -> None:
+    """Refuse, before any work, two records whose reports would share a directory."""
+    if not columns:
+        raise InputError("no column given; pass --columns COL[,COL...]")
+    seen: dict[str, tuple[str, str]] = {}
+    for path in files:
+        for column in columns:
+            name = _report_name(path, column)
+            if name in seen:
+                raise InputError(f"{seen[name][0]} column {seen[name][1]!r} and {path} column "
+                                 f"{column!r} would both be reported in {name}/; give each "
+                                 "file a distinct name")
+            seen[name] = (path, column)
+
+
+def _study_records(args: argparse.Namespace, path: str) -> list[_SensorRecord]:
+    """The records of the file ``path``, one per column, each checked and planned."""
+    from .harness import StudyConfig, plan_study
+
+    rec = _load(args, path)
     rec.require_contiguous("the model-order study")
-    y = rec.column(args.column)
     protocols = ["paper", "fair"] if args.protocol == "both" else [args.protocol]
     config = StudyConfig(
         rate=rec.require_rate(), sensor=args.sensor, units=args.units, orders=args.orders,
@@ -176,18 +273,141 @@ def _cmd_study(args: argparse.Namespace) -> int:
         evaluate_s=args.split[1], horizon_s=args.horizon, n_starts=args.starts,
         paper_denoise=args.denoise, fos_stop=args.stop,
     )
-    result = run_study(y, config, progress=sys.stderr.isatty())
-    title = args.title or f"{args.column} of {Path(args.file).name}"
-    out = Path(args.out)
-    write_study(result, out, title)
-    print(paper_table(result).to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    for note in result.warnings:
-        print(f"fosmodel: warning: {note}", file=sys.stderr)
+    records = []
+    for column in args.columns:
+        y = rec.column(column)
+        try:
+            plan = plan_study(y, config)
+        except InputError as exc:
+            raise InputError(f"{path}, column {column!r}: {exc}") from None
+        records.append(_SensorRecord(path, column, _report_name(path, column), plan))
+    return records
+
+
+def _dask_client(args: argparse.Namespace) -> contextlib.AbstractContextManager:
+    """The Dask client of ``--scheduler`` or ``--workers``; none (this process) without them."""
+    if args.scheduler:
+        from .distributed import connect
+
+        return connect(args.scheduler, args.connect_timeout)
+    if args.workers:
+        from .distributed import local_client
+
+        return local_client(args.workers)
+    return contextlib.nullcontext()
+
+
+def _cmd_study(args: argparse.Namespace) -> int:
+    from .harness import run_studies
+
+    json_path = _out_path(args.json) if args.json else None
+    out = _out_dir(args.out)
+    _check_report_names(args.files, args.columns)
+    records = [record for path in args.files for record in _study_records(args, path)]
+    with _dask_client(args) as client:
+        results = run_studies([r.plan for r in records], client=client,
+                              progress=sys.stderr.isatty())
+    _write_study_reports(records, results, out, args.title)
+    _print_studies(records, results)
     if json_path:
-        write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
-    print(f"study of {len(result.rows)} fits written to {out.resolve()}/"
+        write_text(json_path, json.dumps(_studies_json(records, results), indent=1) + "\n")
+    fits = sum(len(result.rows) for result in results)
+    count = "" if len(records) == 1 else f"{len(records)} records, "
+    print(f"study of {count}{fits} fits written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else ""))
     return 0
+
+
+def _title(record: _SensorRecord, title: str | None, single: bool) -> str:
+    """``--title`` for a lone record; before the record's own title when there are several."""
+    own = f"{record.column} of {Path(record.file).name}"
+    if single:
+        return title or own
+    return f"{title}: {own}" if title else own
+
+
+def _write_study_reports(records: list[_SensorRecord], results: list[StudyResult], out: Path,
+                         title: str | None) -> None:
+    """One record's report in ``out``; several in a directory each and their best rows.
+
+    Everything is written to a temporary directory beside ``out`` first, then
+    moved into place, so a failure leaves ``out`` as it was.
+    """
+    from .report import write_study, write_tables
+
+    single = len(records) == 1
+    tmp = _temp_dir(out)
+    try:
+        for record, result in zip(records, results):
+            write_study(result, tmp if single else tmp / record.name,
+                        _title(record, title, single))
+        if not single:
+            write_tables(_combined_best(records, results), tmp, "best")
+        _publish(tmp, out)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _temp_dir(out: Path) -> Path:
+    """A new hidden directory beside ``out`` (or its nearest existing ancestor)."""
+    base = out.parent
+    while not base.is_dir():
+        base = base.parent
+    tmp = base / f".{out.name}.{uuid.uuid4().hex}.tmp"
+    tmp.mkdir()
+    return tmp
+
+
+def _publish(tmp: Path, out: Path) -> None:
+    """Rename ``tmp`` to ``out``, or move its files into ``out`` if it exists."""
+    if out.is_dir():
+        for item in tmp.iterdir():
+            target = out / item.name
+            if item.is_dir() and target.is_dir():
+                _publish(item, target)
+            else:
+                os.replace(item, target)
+    else:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        os.replace(tmp, out)
+
+
+def _combined_best(records: list[_SensorRecord], results: list[StudyResult]) -> pd.DataFrame:
+    """Every record's best rows in one table, led by its report's name, file and column."""
+    from .report import study_table
+
+    lead = ["Record", "File", "Column"]
+    frame = pd.concat([study_table(result, result.best()).assign(
+        Record=record.name, File=record.file, Column=record.column)
+        for record, result in zip(records, results)], ignore_index=True)
+    return frame[lead + [c for c in frame.columns if c not in lead]]
+
+
+def _print_studies(records: list[_SensorRecord], results: list[StudyResult]) -> None:
+    """The comparison table of one record, or the main columns of every record's best rows."""
+    from .report import paper_table
+
+    single = len(records) == 1
+    if single:
+        table = paper_table(results[0])
+    else:
+        table = _combined_best(records, results)
+        table = table[[c for c in table.columns if c in ("Record", "Protocol", "Method", "Data",
+                                                         "Order L")
+                       or c.startswith(("MSE", "Outage position"))]]
+    print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    for record, result in zip(records, results):
+        for note in result.warnings:
+            print(f"fosmodel: warning: {'' if single else record.name + ': '}{note}",
+                  file=sys.stderr)
+
+
+def _studies_json(records: list[_SensorRecord], results: list[StudyResult]) -> dict:
+    """One record's study as ``StudyResult.to_json_dict``; several as a list of those."""
+    if len(records) == 1:
+        return results[0].to_json_dict()
+    return {"records": [{"file": record.file, "column": record.column, "report": record.name,
+                         **result.to_json_dict()} for record, result in zip(records, results)]}
 
 
 def _fractions(text: str) -> tuple[float, float]:
@@ -204,15 +424,18 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
     from .loop_report import effects_table, write_loop_report
 
     json_path = _out_path(args.json) if args.json else None
+    out = _out_dir(args.out)
     rec = _load(args)
     rec.require_contiguous("the residual loop")
     y = rec.column(args.column)
     aux = args.aux if args.aux is not None else [c for c in rec.names if c != args.column]
+    if args.column in aux:
+        raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
+                         "residual (its lag 0 is the value predicted)")
     channels = {name: rec.column(name) for name in aux}
     config = LoopConfig(rate=rec.require_rate(), sensor=args.sensor, units=args.units,
                         max_lag=args.max_lag, train=args.split[0], evaluate=args.split[1])
     result = close_loop(y, channels, config)
-    out = Path(args.out)
     write_loop_report(result, out, args.title or f"{args.column} of {Path(args.file).name}")
     print(effects_table(result).drop(columns=["Evidence"]).to_string(
         index=False, float_format=lambda v: f"{v:.4g}"))
@@ -229,12 +452,12 @@ def _cmd_allan(args: argparse.Namespace) -> int:
     from .allan import allan_deviation, fit_noise, write_allan
 
     json_path = _out_path(args.json) if args.json else None
+    out = _out_dir(args.out)
     rec = _load(args)
     rec.require_contiguous("the Allan deviation")
     y = rec.column(args.column)
     result = allan_deviation(y, rec.require_rate(), units=args.units, sensor=args.sensor)
     fit = fit_noise(result)
-    out = Path(args.out)
     write_allan(result, fit, out, args.title or f"{args.column} of {Path(args.file).name}")
     print(fit.summary())
     if json_path:
@@ -259,8 +482,15 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors take one line, like every other error."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"fosmodel: error: {message} ({self.prog} --help shows the usage)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="fosmodel",
         description="Fast Orthogonal Search error models for MEMS inertial sensors.",
     )
@@ -293,8 +523,11 @@ def build_parser() -> argparse.ArgumentParser:
     pred.set_defaults(func=_cmd_predict)
 
     study = sub.add_parser("study", help="model-order study: every method, order and degree")
-    study.add_argument("file", help="CSV, .npy or .parquet record")
-    study.add_argument("--column", required=True, help="column to model")
+    study.add_argument("files", nargs="+", metavar="FILE",
+                       help="CSV, .npy or .parquet records; with several files or columns, "
+                            "a report directory per file and column")
+    study.add_argument("--columns", "--column", dest="columns", type=_name_list, required=True,
+                       metavar="COL[,COL...]", help="columns to model, in every file")
     study.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
     _add_loader_options(study)
     study.add_argument("--sensor", required=True, choices=("accel", "gyro"))
@@ -318,6 +551,14 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("--title", help="title of the report")
     study.add_argument("--out", required=True, help="output directory (created)")
     study.add_argument("--json", help="also write every row and the best rows as JSON")
+    dask = study.add_mutually_exclusive_group()
+    dask.add_argument("--scheduler", metavar="ADDRESS",
+                      help="run the fits on the Dask cluster of this scheduler "
+                           "(e.g. tcp://10.0.0.5:8786)")
+    dask.add_argument("--workers", type=_positive_int, metavar="N",
+                      help="run the fits on a local Dask cluster of N single-threaded processes")
+    study.add_argument("--connect-timeout", type=_positive_float, default=10.0, metavar="S",
+                       help="seconds to wait for --scheduler (default 10)")
     study.set_defaults(func=_cmd_study)
 
     loop = sub.add_parser("close-loop", help="find what the model lacks in its residual, "

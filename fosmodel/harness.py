@@ -18,6 +18,13 @@ Two protocols:
 Denoising is applied to the training samples alone for fitting (so that no
 later sample leaks into a fit through the filter), and to the whole record for
 scoring.  Runtime is measured around ``fit`` only.
+
+A study is a set of independent fits: :func:`plan_study` checks, splits and
+denoises the record and lists the fits (:class:`FitTask`), :func:`run_task`
+fits and scores one with one BLAS thread (so that it gives the same bits in any
+process), and :func:`assemble` makes the rows.  :func:`run_studies` runs the
+tasks of several studies in this process or on a Dask cluster
+(:mod:`fosmodel.distributed`, imported only then).
 """
 
 from __future__ import annotations
@@ -33,6 +40,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from .baselines import METHOD_LABELS, make_baseline
+from .blas import one_blas_thread
 from .denoise import DENOISERS, denoise
 from .exceptions import InputError, UnstableModelWarning
 from .metrics import equivalent_position_error, one_step_mse, outage_metrics, to_si_scale
@@ -219,7 +227,162 @@ def _json_value(v: object) -> object:
     return v.item() if isinstance(v, np.generic) else v
 
 
-def run_study(y: object, config: StudyConfig, *, progress: bool = False) -> StudyResult:
+@dataclass(frozen=True)
+class FitTask:
+    """One fit of a study: a configuration and the data it is fit and scored on.
+
+    FOS sees the raw data under both protocols, so it is one task for both rows.
+
+    Attributes
+    ----------
+    method : str
+    order, degree : int
+    denoiser : str or None
+        The denoiser of the data (None: raw data).
+    """
+
+    method: str
+    order: int
+    degree: int
+    denoiser: str | None
+
+
+@dataclass(frozen=True)
+class FitScore:
+    """The outcome of one :class:`FitTask`: its scores and what deserves attention."""
+
+    row: dict[str, object]
+    notes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class StudyPlan:
+    """A study split into independent fits, with the data they need.
+
+    Attributes
+    ----------
+    config : StudyConfig
+    split : Split
+    signals : dict of str or None to (ndarray, ndarray)
+        Per denoiser (None: raw data), the training samples to fit on and the
+        whole record to score against.
+    tasks : tuple of FitTask
+        Every distinct fit, in the order the rows first need it.
+    """
+
+    config: StudyConfig
+    split: Split
+    signals: dict[str | None, tuple[np.ndarray, np.ndarray]]
+    tasks: tuple[FitTask, ...]
+
+    def __reduce__(self) -> tuple:
+        return _unpickle_plan, (self.config, self.split, self.signals, self.tasks)
+
+
+def _unpickle_plan(config, split, signals, tasks) -> StudyPlan:
+    """A plan with its own copy of the signals.
+
+    Unpickled arrays may lie at any byte offset of a received buffer (Dask's
+    frames), and numpy sums arrays that are not 8-byte aligned in another
+    order: the results would differ from this process's in the last bit.
+    """
+    signals = {d: tuple(np.array(a) for a in pair) for d, pair in signals.items()}
+    return StudyPlan(config, split, signals, tasks)
+
+
+def plan_study(y: object, config: StudyConfig) -> StudyPlan:
+    """Check and split the record ``y``, denoise it as the protocols need, list the fits.
+
+    Raises
+    ------
+    InputError
+        If the record is not a finite signal or too short for the split.
+    """
+    y = as_signal(y, "the record")
+    horizon, tau = round(config.horizon_s * config.rate), max(config.taus)
+    split = Split.by_duration(
+        len(y), config.rate, config.train_s, config.evaluate_s,
+        min_predict=max(horizon + 1, 2 * round(tau * config.rate)),
+        why=f" (a {config.horizon_s:g} s outage horizon and two {tau:g} s bias windows)")
+    tasks = tuple(dict.fromkeys(task for _, task in _row_tasks(config)))
+    signals = {d: _signals(y, split, d, config.rate)
+               for d in dict.fromkeys(t.denoiser for t in tasks)}
+    return StudyPlan(config, split, signals, tasks)
+
+
+def _row_tasks(config: StudyConfig) -> list[tuple[str, FitTask]]:
+    """(protocol, task) of every row of the study, in row order."""
+    return [(protocol, FitTask(method, order, degree, config.denoiser(protocol, method)))
+            for protocol in config.protocols for method, order, degree in config.configurations()]
+
+
+def run_task(plan: StudyPlan, task: FitTask) -> FitScore:
+    """Fit and score one task of ``plan``, with one BLAS thread.
+
+    It depends on nothing but its arguments, so it gives the same numbers
+    (runtime aside) in this process or on any worker.
+    """
+    with one_blas_thread():
+        return _score(task, *plan.signals[task.denoiser], plan.split, plan.config)
+
+
+def assemble(plan: StudyPlan, scores: Sequence[FitScore]) -> StudyResult:
+    """The study result from the scores of ``plan.tasks``, in the same order."""
+    if len(scores) != len(plan.tasks):
+        raise ValueError(f"{len(scores)} scores for {len(plan.tasks)} tasks")
+    scored = dict(zip(plan.tasks, scores))
+    rows = [{"protocol": protocol, "method": task.method,
+             "label": method_label(task.method, task.degree), "order": task.order,
+             "degree": task.degree, "data": task.denoiser or "raw", **scored[task].row}
+            for protocol, task in _row_tasks(plan.config)]
+    notes = sorted({note for score in scores for note in score.notes})
+    return StudyResult(pd.DataFrame(rows), plan.config, plan.split, notes)
+
+
+def run_studies(
+    plans: Sequence[StudyPlan], *, client: object = None, progress: bool = False
+) -> list[StudyResult]:
+    """Run every task of several studies, here one by one or all at once on a Dask cluster.
+
+    Parameters
+    ----------
+    plans : sequence of StudyPlan
+    client : distributed.Client, optional
+        Send the tasks to its cluster (see :mod:`fosmodel.distributed`); by
+        default they run in this process, in order.
+    progress : bool
+        Show a progress bar on stderr.
+
+    Returns
+    -------
+    list of StudyResult
+        One per plan; equal whichever way the tasks ran, ``runtime_s`` aside.
+    """
+    if client is None:
+        scores = _run_here(plans, progress)
+    else:
+        from .distributed import run_tasks
+
+        scores = run_tasks(plans, client, progress=progress)
+    return [assemble(plan, plan_scores) for plan, plan_scores in zip(plans, scores)]
+
+
+def _run_here(plans: Sequence[StudyPlan], progress: bool) -> list[list[FitScore]]:
+    bar = tqdm(total=sum(len(plan.tasks) for plan in plans), disable=not progress,
+               file=sys.stderr, desc="study", unit="fit")
+    scores = []
+    with bar:
+        for plan in plans:
+            scores.append([])
+            for task in plan.tasks:
+                scores[-1].append(run_task(plan, task))
+                bar.update()
+    return scores
+
+
+def run_study(
+    y: object, config: StudyConfig, *, progress: bool = False, client: object = None
+) -> StudyResult:
     """Fit, select and score every configuration of ``config`` on the record ``y``.
 
     Parameters
@@ -229,37 +392,14 @@ def run_study(y: object, config: StudyConfig, *, progress: bool = False) -> Stud
     config : StudyConfig
     progress : bool
         Show a progress bar on stderr.
+    client : distributed.Client, optional
+        Run the fits on its Dask cluster instead of in this process.
 
     Returns
     -------
     StudyResult
     """
-    y = as_signal(y, "the record")
-    horizon, tau = round(config.horizon_s * config.rate), max(config.taus)
-    split = Split.by_duration(
-        len(y), config.rate, config.train_s, config.evaluate_s,
-        min_predict=max(horizon + 1, 2 * round(tau * config.rate)),
-        why=f" (a {config.horizon_s:g} s outage horizon and two {tau:g} s bias windows)")
-    configs = config.configurations()
-    data: dict[str | None, tuple[np.ndarray, np.ndarray]] = {}
-    scored: dict[tuple, dict] = {}
-    rows, notes = [], []
-    bar = tqdm(total=len(configs) * len(config.protocols), disable=not progress,
-               file=sys.stderr, desc="study", unit="fit")
-    for protocol in config.protocols:
-        for method, order, degree in configs:
-            denoiser = config.denoiser(protocol, method)
-            if denoiser not in data:
-                data[denoiser] = _signals(y, split, denoiser, config.rate)
-            key = (method, order, degree, denoiser)
-            if key not in scored:  # FOS sees the same raw data under both protocols
-                scored[key] = _score(method, order, degree, *data[denoiser], split, config, notes)
-            rows.append({"protocol": protocol, "method": method, "label":
-                         method_label(method, degree), "order": order, "degree": degree,
-                         "data": denoiser or "raw", **scored[key]})
-            bar.update()
-    bar.close()
-    return StudyResult(pd.DataFrame(rows), config, split, sorted(set(notes)))
+    return run_studies([plan_study(y, config)], client=client, progress=progress)[0]
 
 
 def _signals(y, split, denoiser, rate) -> tuple[np.ndarray, np.ndarray]:
@@ -270,15 +410,15 @@ def _signals(y, split, denoiser, rate) -> tuple[np.ndarray, np.ndarray]:
     return denoise(train, rate, denoiser), denoise(y, rate, denoiser)
 
 
-def _score(method, order, degree, fit_signal, score_signal, split, config, notes) -> dict:
-    model = make_model(method, order, degree, config)
+def _score(task: FitTask, fit_signal, score_signal, split, config) -> FitScore:
+    model = make_model(task.method, task.order, task.degree, config)
     t0 = time.perf_counter()
     model.fit(fit_signal)
     runtime = time.perf_counter() - t0
-    label = f"{method_label(method, degree)} (L={order})"
+    label = f"{method_label(task.method, task.degree)} (L={task.order})"
     stable = model.is_stable()
-    if not stable:
-        notes.append(f"{label}: the fitted model is unstable; its free-run metrics are NaN")
+    notes = () if stable else (
+        f"{label}: the fitted model is unstable; its free-run metrics are NaN",)
     pred = model.predict(score_signal)
     residual = (score_signal - pred)[split.predict]
     mse = one_step_mse(score_signal, pred, split.predict)
@@ -296,4 +436,4 @@ def _score(method, order, degree, fit_signal, score_signal, split, config, notes
     row["outage_position_error_m"] = outage["outage_position_error_m"] if stable else np.nan
     row.update({f"bias_rms_{t:g}s": outage["bias_rms"][t] for t in config.taus})
     row.update(runtime_s=runtime, n_terms=int(model.n_terms_), stable=stable)
-    return row
+    return FitScore(row, notes)

@@ -274,3 +274,89 @@ def test_fit_and_predict_on_segments_and_fill(tmp_path, capsys):
     code, _, err = _run(["fit", path, "--column", "gyro", "--fill", "--out",
                          tmp_path / "m2.json"], capsys)
     assert code == 0 and "filled by linear interpolation (1000 samples added" in err
+
+
+def _imu_files(tmp_path, columns=(("gx", "gy"), ("gx", "gy"))):
+    """imu1.csv and imu2.csv.gz, 900 s at 10 Hz, with the given columns each."""
+    paths = [tmp_path / "imu1.csv", tmp_path / "imu2.csv.gz"]
+    rng = np.random.default_rng(7)
+    for path, names in zip(paths, columns):
+        data = {name: lfilter([1.0], [1.0, -0.9, 0.4], rng.standard_normal(9000)) * 1e-3
+                for name in names}
+        pd.DataFrame({"time": np.arange(9000) / 10.0, **data}).to_csv(path, index=False)
+    return paths
+
+
+def _multi_study(paths, out, *extra):
+    return ["study", *paths, "--columns", "gx,gy", "--sensor", "gyro", "--units", "deg/s",
+            "--orders", "1-2", "--degrees", "1", "--protocol", "fair", "--split", "300,200",
+            "--starts", "5", "--out", out, *extra]
+
+
+def test_study_of_many_files_and_columns(tmp_path, capsys):
+    out, js = tmp_path / "out", tmp_path / "rows.json"
+    code, stdout, err = _run(_multi_study(_imu_files(tmp_path), out, "--json", js), capsys)
+    assert code == 0, err
+    records = ["imu1_gx", "imu1_gy", "imu2_gx", "imu2_gy"]
+    assert sorted(p.name for p in out.iterdir() if p.is_dir()) == records
+    assert all((out / r / "report.md").exists() and (out / r / "order_fair.png").exists()
+               for r in records)
+    best = pd.read_csv(out / "best.csv")
+    assert list(best.columns[:4]) == ["Record", "File", "Column", "Protocol"]
+    assert list(best["Record"].unique()) == records and len(best) == 4 * 5
+    one = pd.read_csv(out / "imu2_gy" / "best.csv")
+    pd.testing.assert_frame_equal(best[best["Record"] == "imu2_gy"].iloc[:, 3:].reset_index(
+        drop=True), one)
+    assert (out / "best.md").read_text().startswith("| Record | File | Column |")
+    data = json.loads(js.read_text())
+    assert [(r["report"], r["column"]) for r in data["records"]] == [
+        (r, r[-2:]) for r in records]
+    assert "study of 4 records, 36 fits written to" in stdout and "imu2_gy" in stdout
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_study_bad_column_in_second_file_writes_nothing(tmp_path, capsys):
+    paths = _imu_files(tmp_path, columns=(("gx", "gy"), ("gx", "gz")))
+    out, js = tmp_path / "out", tmp_path / "rows.json"
+    code, _, err = _run(_multi_study(paths, out, "--json", js), capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"{paths[1]}: no column 'gy'; columns: gx, gz" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["imu1.csv", "imu2.csv.gz"]
+
+
+def test_study_refuses_reports_that_would_share_a_directory(tmp_path, capsys):
+    path = _imu_files(tmp_path)[0]
+    code, _, err = _run(_multi_study([path, path], tmp_path / "out"), capsys)
+    assert code == 2 and err.count("\n") == 1
+    assert f"{path} column 'gx' and {path} column 'gx' would both be reported in imu1_gx/" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_study_unreachable_scheduler_exit_2(tmp_path, capsys):
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        address = f"tcp://127.0.0.1:{s.getsockname()[1]}"  # closed once the block ends
+    path = _imu_files(tmp_path)[0]
+    code, _, err = _run(_multi_study([path], tmp_path / "out", "--scheduler", address,
+                                     "--connect-timeout", "1"), capsys)
+    assert code == 2 and err.count("\n") == 1
+    assert f"fosmodel: error: cannot connect to the Dask scheduler at {address}" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_study_output_is_moved_into_an_existing_directory(tmp_path):
+    out, tmp = tmp_path / "out", tmp_path / ".out.tmp"
+    (out / "imu1_gx").mkdir(parents=True)
+    (out / "imu1_gx" / "report.md").write_text("old")
+    (out / "notes.txt").write_text("mine")
+    (tmp / "imu1_gx").mkdir(parents=True)
+    (tmp / "imu1_gx" / "report.md").write_text("new")
+    (tmp / "best.csv").write_text("new")
+    cli._publish(tmp, out)
+    assert (out / "imu1_gx" / "report.md").read_text() == "new"
+    assert (out / "best.csv").read_text() == "new" and (out / "notes.txt").read_text() == "mine"
+    fresh = tmp_path / "new" / "deeper"
+    cli._publish(out, fresh)
+    assert (fresh / "best.csv").exists() and not out.exists()

@@ -5,8 +5,8 @@ import pandas as pd
 import pytest
 from records import bursty_csv, spiky_csv
 
-from fosmodel.exceptions import InputError
 from fosmodel import loader
+from fosmodel.exceptions import InputError
 from fosmodel.loader import load_record, parse_scales
 
 

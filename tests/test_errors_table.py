@@ -1,0 +1,183 @@
+"""The README's table of errors, row by row: each problem, built here, gives what the row shows.
+
+The table (README, "Command line", ``### Errors``) has one row per input problem: the problem,
+the message after ``fosmodel: error: `` (``...`` where it names a file or goes on), and the
+exit code.  ``BUILDERS`` maps each problem, spelt as in the table, to a function that writes
+the input and returns the command line; a row without a builder, or a builder without a row,
+fails, so that the table and the code cannot drift apart.
+"""
+
+import gzip
+import itertools
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from records import bursty_csv, spiky_csv
+
+from fosmodel import cli
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def _table():
+    """(problem, message, exit code) of each row of the README's ``### Errors`` table."""
+    text = README.read_text(encoding="utf-8")
+    if "\n### Errors\n" not in text:
+        return []
+    lines = text.split("\n### Errors\n", 1)[1].split("\n## ", 1)[0].splitlines()
+    table = itertools.dropwhile(lambda line: not line.startswith("|"), lines)
+    rows = list(itertools.takewhile(lambda line: line.startswith("|"), table))[2:]
+    return [tuple(cell.strip() for cell in row.strip("|").split("|")) for row in rows]
+
+
+ROWS = _table()
+
+
+def _record(n=40, rate=100.0):
+    """CSV text of a small valid record: time, gx and temp_c."""
+    rng = np.random.default_rng(1)
+    rows = [f"{k / rate!r},{g:.6f},{20 + k / 1000:.3f}" for k, g in
+            enumerate(rng.standard_normal(n))]
+    return "\n".join(["time,gx,temp_c", *rows]) + "\n"
+
+
+def _write(tmp, text, name="rec.csv"):
+    path = tmp / name
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    return str(path)
+
+
+def _fit(tmp, text, *extra, name="rec.csv"):
+    return ["fit", _write(tmp, text, name), "--column", "gx", *extra,
+            "--out", str(tmp / "model.json")]
+
+
+def _model(tmp, edit=None):
+    """A model file fit on a valid record, optionally edited as a dict by ``edit``."""
+    path = tmp / "model.json"
+    assert cli.main(_fit(tmp, _record(200), "--max-lag", "2", name="train.csv")) == 0
+    if edit:
+        path.write_text(json.dumps(edit(json.loads(path.read_text()))))
+    return str(path)
+
+
+def _predict(tmp, record, model):
+    return ["predict", _write(tmp, record), "--model", model, "--out", str(tmp / "pred.csv")]
+
+
+def _gappy(tmp):
+    t = np.r_[np.arange(0, 1, 0.01), np.arange(1.5, 3, 0.01)]
+    return _write(tmp, "time,gx\n" + "".join(f"{v:.2f},{np.sin(3 * v):.6f}\n" for v in t))
+
+
+def _truncated_gzip(tmp):
+    return _fit(tmp, gzip.compress(_record().encode())[:-10], name="rec.csv.gz")
+
+
+def _three_d_npy(tmp):
+    np.save(tmp / "rec.npy", np.zeros((4, 3, 2)))
+    return ["fit", str(tmp / "rec.npy"), "--column", "c0", "--out", str(tmp / "model.json")]
+
+
+def _report(command, tmp, path, *extra):
+    """``study``, ``close-loop`` or ``allan`` on ``path``, with a report directory."""
+    study = ["--sensor", "gyro", "--units", "deg/s"] if command == "study" else []
+    return [command, path, "--column", "gx", *study, *extra, "--out", str(tmp / "report")]
+
+
+BUILDERS = {
+    "missing file": lambda tmp: ["fit", str(tmp / "none.csv"), "--column", "gx", "--out",
+                                 str(tmp / "m.json")],
+    "empty file": lambda tmp: _fit(tmp, ""),
+    "header only": lambda tmp: _fit(tmp, "time,gx\n"),
+    "non-numeric cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,abc\n"),
+    "empty or NaN cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,\n"),
+    "infinite cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,-inf\n"),
+    "value too large to compute with": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,1e308\n"),
+    "time repeats": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,2\n0.01,3\n"),
+    "time goes backwards": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.02,2\n0.01,3\n"),
+    "gap in time without `--fill` or `--segments`":
+        lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,2\n0.02,3\n0.5,4\n0.51,5\n"),
+    "bursty host time without `--uniform`":
+        lambda tmp: ["fit", str(bursty_csv(tmp)[0]), "--column", "gx", "--out",
+                     str(tmp / "m.json")],
+    "`--rate` disagreeing with the time column": lambda tmp: _fit(tmp, _record(), "--rate", "50"),
+    "time column in nanoseconds": lambda tmp: _fit(tmp, "time,gx\n0,1\n1e7,2\n2e7,3\n"),
+    "one sample and no `--rate`": lambda tmp: _fit(tmp, "time,gx\n0,1\n"),
+    "no time column and no `--rate`": lambda tmp: _report("allan", tmp, _write(tmp, "gx\n1\n2\n")),
+    "missing or misspelt column": lambda tmp: _fit(tmp, _record(), "--column", "g_x"),
+    "wrong delimiter": lambda tmp: _fit(tmp, "time;gx\n0;1\n0.01;2\n"),
+    "column name given twice": lambda tmp: _fit(tmp, "time,gx,gx\n0,1,2\n0.01,2,3\n"),
+    "column without a name": lambda tmp: _fit(tmp, "time,,gx\n0,1,2\n0.01,2,3\n"),
+    "row with more fields than the header": lambda tmp: _fit(tmp, "time,gx\n0,1,2\n0.01,2,3\n"),
+    "file not in UTF-8": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,2\xb0\n".encode("latin-1")),
+    "damaged compressed file": _truncated_gzip,
+    "damaged `.npy` or Parquet file": lambda tmp: _fit(tmp, b"not numpy", name="rec.npy"),
+    "`.npy` array of 3 or more dimensions": _three_d_npy,
+    "bad `--scale`": lambda tmp: _fit(tmp, _record(), "--scale", "gx=x"),
+    "`--scale` of a missing column": lambda tmp: _fit(tmp, _record(), "--scale", "g_x=2"),
+    "bad `--rate` or other option value": lambda tmp: _fit(tmp, _record(), "--rate", "-5"),
+    "modelled column given as its own input": lambda tmp: _fit(tmp, _record(), "--exog", "gx:1"),
+    "record too short for the lag window": lambda tmp: _fit(tmp, _record(), "--max-lag", "100"),
+    "record too short for the model's lag window (`predict`)":
+        lambda tmp: _predict(tmp, _record(2), _model(tmp)),
+    "record too short for the split": lambda tmp: _report("close-loop", tmp,
+                                                          _write(tmp, _record(3000))),
+    "gaps kept with `--segments` where a contiguous record is needed":
+        lambda tmp: _report("allan", tmp, _gappy(tmp), "--segments"),
+    "outliers dropped without a time column":
+        lambda tmp: ["fit", str(spiky_csv(tmp, with_time=False)[0]), "--column", "a",
+                     "--outliers", "drop", "--out", str(tmp / "m.json")],
+    "model file missing": lambda tmp: _predict(tmp, _record(), str(tmp / "none.json")),
+    "model file not JSON": lambda tmp: _predict(tmp, _record(), _write(tmp, "{", "m.json")),
+    "model file damaged inside":
+        lambda tmp: _predict(tmp, _record(), _model(tmp, lambda d: {**d, "fitted": {}})),
+    "model file from a newer fosmodel":
+        lambda tmp: _predict(tmp, _record(), _model(tmp, lambda d: {**d, "format_version": 99})),
+    "model file of another kind":
+        lambda tmp: _predict(tmp, _record(), _write(tmp, '{"rows": []}', "m.json")),
+    "output directory missing":
+        lambda tmp: _fit(tmp, _record())[:-1] + [str(tmp / "none" / "m.json")],
+    "output file is a directory": lambda tmp: _fit(tmp, _record())[:-1] + [str(tmp)],
+    "report directory is a file":
+        lambda tmp: _report("allan", tmp, _write(tmp, _record()))[:-1] + [str(tmp / "rec.csv")],
+}
+
+
+def _snapshot(directory):
+    return {str(p.relative_to(directory)): p.read_bytes() if p.is_file() else None
+            for p in sorted(directory.rglob("*"))}
+
+
+def _run(argv):
+    try:
+        return cli.main(argv)
+    except SystemExit as exc:  # argparse: a usage error
+        return exc.code
+
+
+def test_the_readme_has_the_errors_table():
+    assert len(ROWS) >= 30 and all(len(row) == 3 for row in ROWS)
+
+
+def test_every_builder_has_a_row():
+    assert sorted(set(BUILDERS) - {row[0] for row in ROWS}) == []
+
+
+@pytest.mark.parametrize("problem, shown, code", ROWS, ids=[row[0] for row in ROWS])
+def test_each_row_of_the_errors_table(problem, shown, code, tmp_path, capsys):
+    assert problem in BUILDERS, f"no test builds the README's error row {problem!r}"
+    argv = BUILDERS[problem](tmp_path)
+    capsys.readouterr()  # what building printed
+    before = _snapshot(tmp_path)
+    assert _run(argv) == int(code)
+    lines = [line for line in capsys.readouterr().err.splitlines()
+             if not line.startswith("fosmodel: note: ")]
+    assert len(lines) == 1 and lines[0].startswith("fosmodel: error: "), lines
+    at = 0
+    for part in filter(None, shown.strip("`").split("...")):  # in order, around the "..."
+        assert part in lines[0][at:], (part, lines[0])
+        at = lines[0].index(part, at) + len(part)
+    assert _snapshot(tmp_path) == before  # nothing written
