@@ -109,13 +109,16 @@ def _out_dir(path: str) -> Path:
     return out
 
 
-def _load(args: argparse.Namespace, path: str | None = None) -> Record:
+def _load(args: argparse.Namespace, path: str | None = None,
+          columns: list[str] | None = None) -> Record:
     """The record of ``path`` (default ``args.file``) with the loader options.
 
-    Its notes go to stderr, after the file's name when ``path`` is given.
+    Only ``columns`` (default: all) are read and checked.  Its notes go to
+    stderr, after the file's name when ``path`` is given.
     """
-    rec = load_record(path or args.file, rate=args.rate, scale=parse_scales(args.scale or []),
-                      uniform=args.uniform, outliers=args.outliers, gaps=args.gaps)
+    rec = load_record(path or args.file, columns=columns, rate=args.rate,
+                      scale=parse_scales(args.scale or []), uniform=args.uniform,
+                      outliers=args.outliers, gaps=args.gaps)
     for note in rec.notes:
         print(f"fosmodel: note: {path + ': ' if path else ''}{note}", file=sys.stderr)
     return rec
@@ -141,15 +144,16 @@ def _add_loader_options(parser: argparse.ArgumentParser) -> None:
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     out = _out_path(args.out)
-    rec = _load(args)
-    y = rec.column(args.column)
     exog_lags = dict(args.exog or [])
     if args.column in exog_lags:
         raise InputError(f"--exog {args.column}:{exog_lags[args.column]}: the modelled column "
                          "cannot be its own input (its lag 0 is the value predicted; its past "
                          "is in --max-lag)")
+    rec = _load(args, columns=[args.column, *exog_lags])
+    y = rec.column(args.column)
     model = FOSModel(max_lag=args.max_lag, degree=args.degree, exog_lags=exog_lags,
-                     max_terms=args.max_terms, stop=args.stop, tol=args.tol)
+                     max_terms=args.max_terms, stop=args.stop, tol=args.tol,
+                     max_candidates=args.max_candidates)
     spec = model._spec()
     print(f"candidates: {count_candidates(spec)} (L={spec.max_lag}, CP={spec.degree}"
           + "".join(f", {k}:0-{v}" for k, v in exog_lags.items()) + ")")
@@ -202,12 +206,13 @@ def _check_model(model: FOSModel, path: str) -> None:
 def _cmd_predict(args: argparse.Namespace) -> int:
     out = _out_path(args.out)
     model = _read_model(args.model)
-    rec = _load(args)
     column = args.column or model.meta_.get("column")
     if not column:
         raise InputError("the model does not say which column it models; pass --column")
+    inputs = [*model.spec_.exog_lags, *model.spec_.columns]
+    rec = _load(args, columns=list(dict.fromkeys([column, *inputs])))
     y = rec.column(column)
-    channels = {name: rec.column(name) for name in [*model.spec_.exog_lags, *model.spec_.columns]}
+    channels = {name: rec.column(name) for name in inputs}
     pred = model.predict(y, channels, segments=rec.segments)
     resid = (y - pred)[~np.isnan(pred)]  # NaN over the lag window of each segment
     if not resid.size:
@@ -264,7 +269,7 @@ def _study_records(args: argparse.Namespace, path: str) -> list[_SensorRecord]:
     """The records of the file ``path``, one per column, each checked and planned."""
     from .harness import StudyConfig, plan_study
 
-    rec = _load(args, path)
+    rec = _load(args, path, columns=args.columns)
     rec.require_contiguous("the model-order study")
     protocols = ["paper", "fair"] if args.protocol == "both" else [args.protocol]
     config = StudyConfig(
@@ -425,13 +430,13 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
 
     json_path = _out_path(args.json) if args.json else None
     out = _out_dir(args.out)
-    rec = _load(args)
+    if args.aux is not None and args.column in args.aux:
+        raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
+                         "residual (its lag 0 is the value predicted)")
+    rec = _load(args, columns=None if args.aux is None else [args.column, *args.aux])
     rec.require_contiguous("the residual loop")
     y = rec.column(args.column)
     aux = args.aux if args.aux is not None else [c for c in rec.names if c != args.column]
-    if args.column in aux:
-        raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
-                         "residual (its lag 0 is the value predicted)")
     channels = {name: rec.column(name) for name in aux}
     config = LoopConfig(rate=rec.require_rate(), sensor=args.sensor, units=args.units,
                         max_lag=args.max_lag, train=args.split[0], evaluate=args.split[1])
@@ -453,7 +458,7 @@ def _cmd_allan(args: argparse.Namespace) -> int:
 
     json_path = _out_path(args.json) if args.json else None
     out = _out_dir(args.out)
-    rec = _load(args)
+    rec = _load(args, columns=[args.column])
     rec.require_contiguous("the Allan deviation")
     y = rec.column(args.column)
     result = allan_deviation(y, rec.require_rate(), units=args.units, sensor=args.sensor)
@@ -510,6 +515,8 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--max-terms", type=int, help="most terms besides the constant")
     fit.add_argument("--stop", choices=STOP_RULES, default="korenberg", help="stopping rule")
     fit.add_argument("--tol", type=float, help="fraction for --stop variance / mean_square")
+    fit.add_argument("--max-candidates", type=_positive_int, default=100_000,
+                     help="refuse a candidate set larger than this (default 100000)")
     fit.add_argument("--out", required=True, help="model file to write (JSON)")
     fit.set_defaults(func=_cmd_fit)
 

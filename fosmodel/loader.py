@@ -217,6 +217,8 @@ def load_record(
     names, first_line, preamble = _header(path)
     if not names:
         raise InputError(f"{src}: no columns")
+    if all(n in TIME_COLUMNS for n in names):
+        raise InputError(f"{src}: only a time column, no data columns")
     keep = _kept(names, columns, scale or {}, src)
     data = _convert(_blocks(path, preamble.header_index, names, keep), src, first_line)
     if not len(next(iter(data.values()))):
@@ -303,9 +305,13 @@ def _kind(path: Path) -> str:
 def _kept(names: list[str], columns: Sequence[str] | None, scale: Mapping[str, float],
           src: str) -> list[str] | None:
     """The columns to read (None: all): those asked for, the time and the scaled ones."""
+    unknown = [c for c in scale if c not in names]
+    if unknown:
+        raise InputError(f"{src}: --scale names no column {unknown[0]!r}"
+                         f"{did_you_mean(unknown[0], names)}; columns: {', '.join(names)}")
     if columns is None:
         return None
-    missing = [c for c in columns if c not in names]
+    missing = [c for c in columns if c not in names or c in TIME_COLUMNS]
     if missing:
         shown = [n for n in names if n not in TIME_COLUMNS]
         raise InputError(f"{src}: no column {missing[0]!r}{did_you_mean(missing[0], shown)}; "
@@ -406,16 +412,36 @@ def _csv_blocks(path: Path, skip: int, keep: list[str] | None) -> Iterator[pd.Da
     """The rows under the header, in blocks.
 
     ``index_col=False``: a first data row longer than the header is an error,
-    never a silent shift of the columns onto an index.
+    never a silent shift of the columns onto an index.  Every field is parsed
+    (pandas' ``usecols`` would drop a row's extra fields without a word) and
+    the ``keep`` columns taken from each block; a row shorter than the header
+    (its last field missing) is refused even when that column is not kept,
+    since the missing field may be any of them.
     """
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", pd.errors.ParserWarning)
             with pd.read_csv(path, low_memory=False, index_col=False, skiprows=skip,
-                             usecols=keep, chunksize=CHUNK_ROWS, **_CSV_OPTIONS) as reader:
-                yield from reader
+                             chunksize=CHUNK_ROWS, **_CSV_OPTIONS) as reader:
+                first_line = skip + 2
+                for block in reader:
+                    if keep is not None:
+                        _check_last_field(block, keep, path, first_line)
+                        first_line += len(block)
+                    yield block if keep is None else block[keep]
     except Exception as exc:  # noqa: BLE001 - one message for every way a read can fail
         raise _csv_error(path, skip, exc) from None
+
+
+def _check_last_field(block: pd.DataFrame, keep: list[str], path: Path, first_line: int) -> None:
+    """Refuse a row whose last field, in a column not kept, is missing or empty."""
+    last = block.columns[-1]
+    if last in keep:  # checked cell by cell with the kept columns
+        return
+    short = np.flatnonzero(block[last].isna().to_numpy())
+    if short.size:
+        raise InputError(f"{path}: column {last!r}, line {first_line + short[0]}: an empty cell "
+                         f"or a row shorter than the header ({block.shape[1]} fields)")
 
 
 def _csv_error(path: Path, skip: int, exc: Exception) -> Exception:
@@ -601,10 +627,7 @@ def _preamble_rate(
 
 def _apply_scale(data: dict[str, np.ndarray], scale: Mapping[str, float], src: str,
                  notes: list[str]) -> None:
-    for name, factor in scale.items():
-        if name not in data:
-            raise InputError(f"{src}: --scale names no column {name!r}"
-                             f"{did_you_mean(name, data)}; columns: {', '.join(data)}")
+    for name, factor in scale.items():  # the names are checked against the header by _kept
         if not (np.isfinite(factor) and factor != 0):
             raise InputError(f"{src}: --scale {name}={factor!r}: the factor must be finite and "
                              "non-zero")

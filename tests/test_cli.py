@@ -360,3 +360,27 @@ def test_study_output_is_moved_into_an_existing_directory(tmp_path):
     fresh = tmp_path / "new" / "deeper"
     cli._publish(out, fresh)
     assert (fresh / "best.csv").exists() and not out.exists()
+
+
+def test_fit_refuses_a_candidate_set_over_max_candidates(record, tmp_path, capsys):
+    out = tmp_path / "m.json"
+    code, stdout, err = _run(["fit", record, "--column", "gyro_y", "--max-lag", 50, "--degree", 2,
+                              "--max-candidates", 1000, "--out", out], capsys)
+    assert code == 2 and not out.exists()
+    assert "candidates: 1326 (L=50, CP=2)" in stdout
+    assert "1326 candidates exceed max_candidates=1000" in err and "MiB" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_commands_read_only_the_columns_they_use(record, tmp_path, capsys):
+    frame = pd.read_csv(record)
+    frame["notes"] = "warm"  # a text column the commands never touch
+    path = tmp_path / "wide.csv"
+    frame.to_csv(path, index=False)
+    model = tmp_path / "m.json"
+    assert _run(["fit", path, "--column", "gyro_y", "--exog", "temp_c:1", "--out", model],
+                capsys)[0] == 0
+    assert _run(["predict", path, "--model", model, "--out", tmp_path / "p.csv"], capsys)[0] == 0
+    assert _run(["allan", path, "--column", "gyro_y", "--out", tmp_path / "allan"], capsys)[0] == 0
+    code, _, err = _run(["fit", path, "--column", "notes", "--out", tmp_path / "x.json"], capsys)
+    assert code == 2 and "column 'notes'" in err and "not a number" in err

@@ -425,3 +425,18 @@ def test_npy_is_memory_mapped(tmp_path, monkeypatch):
                         or real_load(*a, **k))
     load_record(tmp_path / "w.npy", columns=["c0"], rate=100.0)
     assert modes and set(modes) == {"r"}
+
+
+@pytest.mark.parametrize("text", ["time,gx\n0,1,2\n0.01,2\n", "time,gx\n0,1\n0.01,2,3\n0.02,3\n"])
+def test_a_row_with_extra_fields_is_refused_when_reading_some_columns(tmp_path, text):
+    path = tmp_path / "rec.csv"
+    path.write_text(text)
+    with pytest.raises(InputError, match="more fields|Expected 2 fields"):
+        loader.load_record(path, columns=["gx"], rate=100)
+
+
+def test_a_short_row_is_refused_when_reading_some_columns(tmp_path):
+    path = tmp_path / "rec.csv"
+    path.write_text("time,gx,temp\n0,1,20\n0.01,21\n0.02,3,20\n")  # gx or temp missing on line 3
+    with pytest.raises(InputError, match=r"column 'temp', line 3: an empty cell or a row shorter"):
+        loader.load_record(path, columns=["gx"])
