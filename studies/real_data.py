@@ -1,0 +1,312 @@
+"""Real MEMS recordings end to end: model-order studies, Allan deviation and the residual loop.
+
+Reads ``../shared/data`` (sources and licences in its README) and skips with a
+clear message where it is absent.  Writes every report, table and figure under
+``studies/results/real/`` and rewrites the README section ``real-data`` from
+this run, so every number there comes from it.
+
+* Model-order study (orders 1-10, FOS CP 1 and 2, every method, both
+  protocols) on every axis of the six ADIS16405 sessions and of the two
+  MPU-6050 records.
+* Allan deviation and noise coefficients of every axis.
+* Residual loop on every axis of ADIS16405 sessions imu1 and imu4, of both
+  MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped).
+* The effects the issue points to, checked one by one.
+
+Run: ``python studies/real_data.py`` (about half an hour on 2 cores).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from readme_section import README, replace_section
+
+from fosmodel.allan import allan_deviation, fit_noise, write_allan
+from fosmodel.closeloop import LoopConfig, LoopResult, close_loop, score_family
+from fosmodel.diagnose import least_squares_spectrum
+from fosmodel.effects import CandidateFamily, Effect
+from fosmodel.harness import StudyConfig, StudyResult, run_study
+from fosmodel.loader import Record, load_record
+from fosmodel.loop_report import write_loop_report
+from fosmodel.report import paper_table, write_study
+from fosmodel.samples import load_mpu6050_static
+from fosmodel.summary import markdown_table
+
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO.parent / "shared" / "data"
+OUT = REPO / "studies" / "results" / "real"
+ADIS = {"gx_dps": ("gyro", "deg/s"), "gy_dps": ("gyro", "deg/s"), "gz_dps": ("gyro", "deg/s"),
+        "ax_g": ("accel", "g"), "ay_g": ("accel", "g"), "az_g": ("accel", "g")}
+SUNSIDED = {**ADIS}  # same column names and units
+TOMI = {"gx": ("gyro", "deg/s"), "gy": ("gyro", "deg/s"), "gz": ("gyro", "deg/s"),
+        "ax": ("accel", "g"), "ay": ("accel", "g"), "az": ("accel", "g")}
+LOOP_ADIS = (1, 4)
+SUNSIDED_FILE = "unmoved-with-x-pointing-forward-10min.csv.gz"
+
+
+def records() -> dict[str, tuple[Record, dict]]:
+    """Every record of the study with the units of its axes."""
+    out = {f"ADIS16405 imu{k}": (load_record(DATA / "adis16405" / f"imu{k}.csv.gz", rate=100),
+                                 ADIS) for k in range(1, 7)}
+    out["MPU-6050 sunsided"] = (load_record(DATA / "mpu6050_sunsided" / SUNSIDED_FILE,
+                                            uniform=True), SUNSIDED)
+    out["MPU-6050 tomisuarez2"] = (load_mpu6050_static(), TOMI)
+    return out
+
+
+def slug(name: str) -> str:
+    return name.lower().replace("-", "").replace(" ", "_")
+
+
+# -- model-order studies ----------------------------------------------------------------------
+
+
+def _best(result: StudyResult, protocol: str, methods: tuple[str, ...], col: str):
+    best = result.best()
+    rows = best[(best["protocol"] == protocol) & best["method"].isin(methods)]
+    return rows.loc[rows[col].idxmin()]
+
+
+def study_row(record: str, axis: str, result: StudyResult) -> dict:
+    """Best FOS against the best AR / Gauss-Markov model, per protocol and metric."""
+    ar = ("yw", "cov", "burg", "gm")
+    out = {"Record": record, "Axis": axis}
+    for protocol, col, label in (("fair", "mse", "fair, one-step MSE"),
+                                 ("fair", "outage_position_error_m", "fair, 30 s outage"),
+                                 ("paper", "mse", "paper, one-step MSE")):
+        fos, base = _best(result, protocol, ("fos",), col), _best(result, protocol, ar, col)
+        out[f"{label}: FOS / best AR"] = fos[col] / base[col]
+    fos = _best(result, "fair", ("fos",), "mse")
+    out["best FOS (fair)"] = f"{fos['label']}, L={fos['order']}"
+    return out
+
+
+def run_studies(recs) -> tuple[pd.DataFrame, dict]:
+    rows, kept = [], {}
+    for name, (rec, axes) in recs.items():
+        for axis, (sensor, units) in axes.items():
+            result = run_study(rec.column(axis), StudyConfig(rate=rec.rate, sensor=sensor,
+                                                             units=units))
+            write_study(result, OUT / "study" / slug(name) / axis, f"{name} {axis} ({units})")
+            rows.append(study_row(name, axis, result))
+            kept[(name, axis)] = result
+        print(f"study: {name} done", flush=True)
+    return pd.DataFrame(rows), kept
+
+
+# -- Allan deviation --------------------------------------------------------------------------
+
+
+def _nav(fit, term: str) -> str:
+    value = fit.navigation(term)
+    if value is None or not fit.resolved[term]:
+        return "not resolved"
+    return f"{value[0]:.3g} {value[1]}"
+
+
+def run_allan(recs, mtig: Record) -> pd.DataFrame:
+    rows = []
+    items = [(name, rec, axes) for name, (rec, axes) in recs.items()]
+    items.append(("MTi-G", mtig, {"gyro_x": ("gyro", "rad/s")}))
+    for name, rec, axes in items:
+        for axis, (sensor, units) in axes.items():
+            res = allan_deviation(rec.column(axis), rec.rate, sensor=sensor, units=units)
+            fit = fit_noise(res)
+            write_allan(res, fit, OUT / "allan" / slug(name) / axis, f"{name} {axis}")
+            rows.append({"Record": name, "Axis": axis, "White noise (ARW / VRW)": _nav(fit, "N"),
+                         "Bias instability": _nav(fit, "B"), "Rate random walk": _nav(fit, "K"),
+                         "Quantization": _nav(fit, "Q")})
+        print(f"allan: {name} done", flush=True)
+    return pd.DataFrame(rows)
+
+
+# -- residual loop ----------------------------------------------------------------------------
+
+
+def loop_row(record: str, axis: str, res: LoopResult) -> dict:
+    b, a = res.before, res.after
+    return {"Record": record, "Axis": axis,
+            "Effects kept": "; ".join(s.effect.describe() for s in res.steps) or "none",
+            "Rejected on evaluation": "; ".join(sorted({r["effect"] for r in res.rejected}))
+            or "none",
+            "One-step MSE after / before": a["mse"] / b["mse"],
+            "30 s outage position after / before": (a["outage_position_error_m"]
+                                                    / b["outage_position_error_m"]),
+            "30 s bias RMS after / before": a["bias_rms"]["30"] / b["bias_rms"]["30"]}
+
+
+def run_loops(recs, mtig_keep: Record, mtig_clip: Record) -> tuple[pd.DataFrame, dict]:
+    targets = [(f"ADIS16405 imu{k}", *recs[f"ADIS16405 imu{k}"]) for k in LOOP_ADIS]
+    targets += [(n, *recs[n]) for n in ("MPU-6050 sunsided", "MPU-6050 tomisuarez2")]
+    targets += [("MTi-G (outliers kept)", mtig_keep, {"gyro_x": ("gyro", "rad/s")}),
+                ("MTi-G (outliers clipped)", mtig_clip, {"gyro_x": ("gyro", "rad/s")})]
+    rows, results = [], {}
+    for name, rec, axes in targets:
+        for axis, (sensor, units) in axes.items():
+            others = {c: rec.column(c) for c in rec.names if c != axis}
+            res = close_loop(rec.column(axis), others,
+                             LoopConfig(rate=rec.rate, sensor=sensor, units=units))
+            write_loop_report(res, OUT / "loop" / slug(name) / axis, f"{name} {axis}")
+            rows.append(loop_row(name, axis, res))
+            results[(name, axis)] = res
+            print(f"loop: {name} {axis}: {rows[-1]['Effects kept']}", flush=True)
+    return pd.DataFrame(rows), results
+
+
+# -- the effects the issue points to -----------------------------------------------------------
+
+
+def temperature_check(rec: Record) -> pd.DataFrame:
+    """MPU-6050 (sunsided): what adding the die temperature does, axis by axis."""
+    temp = rec.column("temp_c")
+    n10 = int(10 * rec.rate)
+    m = len(temp) // n10 * n10
+    rows = []
+    for axis, (sensor, units) in SUNSIDED.items():
+        y = rec.column(axis)
+        config = LoopConfig(rate=rec.rate, sensor=sensor, units=units)
+        channels = {"temp_c": temp}
+        base = score_family(y, channels, config, CandidateFamily(config.max_lag))
+        family = CandidateFamily(config.max_lag).add(
+            Effect("aux", channel="temp_c", max_lag=2), channels,
+            np.arange(len(y)) / rec.rate, slice(0, round(config.train * len(y))))
+        warm = score_family(y, channels, config, family)
+        means = y[:m].reshape(-1, n10).mean(axis=1), temp[:m].reshape(-1, n10).mean(axis=1)
+        rows.append({"Axis": axis, "corr(10 s means, temp_c)": np.corrcoef(*means)[0, 1],
+                     "One-step MSE change": warm["mse"] / base["mse"] - 1,
+                     "30 s bias RMS change": warm["bias_rms"]["30"] / base["bias_rms"]["30"] - 1,
+                     "30 s outage position change": warm["outage_position_error_m"]
+                     / base["outage_position_error_m"] - 1})
+    return pd.DataFrame(rows)
+
+
+def band_ratio(res: LoopResult, rate: float, lo: float, hi: float) -> tuple[float, float]:
+    """Mean least-squares spectrum of the first residual in [lo, hi] Hz over its median,
+    and the frequency of the largest value there."""
+    freqs, s = least_squares_spectrum(res.residual_before, rate)
+    band = (freqs >= lo) & (freqs <= hi)
+    return float(s[band].mean() / np.median(s)), float(freqs[band][np.argmax(s[band])])
+
+
+def named_effects(loops: dict, recs, mtig_keep: Record, temp: pd.DataFrame) -> list[str]:
+    """One sentence per effect of the issue's list, from this run's numbers."""
+    lines = []
+    ay = temp.set_index("Axis").loc["ay_g"]
+    loop_ay = loops[("MPU-6050 sunsided", "ay_g")]
+    took = any(s.effect.channel == "temp_c" for s in loop_ay.steps)
+    lines.append(
+        f"- **MPU-6050 die temperature.** The 10 s means of ay correlate with temp_c at "
+        f"r = {ay['corr(10 s means, temp_c)']:.2f}. Adding temp_c (lags 0-2 and its square) to "
+        f"the starting model changes the prediction-segment one-step MSE by "
+        f"{100 * ay['One-step MSE change']:+.2f} % and the 30 s bias RMS by "
+        f"{100 * ay['30 s bias RMS change']:+.1f} %. The loop itself "
+        + ("keeps temp_c on ay." if took else "does not keep temp_c on ay: "
+           + _rejection(loop_ay, "aux temp_c")))
+    for axis in ("ax_g", "ay_g", "az_g"):
+        res = loops[("ADIS16405 imu1", axis)]
+        ratio, peak = band_ratio(res, 100.0, 0.5, 0.62)
+        kept = [s for s in res.steps if s.effect.kind == "periodic"]
+        lines.append(
+            f"- **ADIS16405 imu1 {axis}, 0.5-0.62 Hz.** The residual spectrum there is "
+            f"{ratio:.1f} times its median, peaking at {peak:.3f} Hz; the loop "
+            + (f"keeps a sinusoid at {kept[0].effect.freq_hz:.4f} Hz." if kept else
+               "keeps no sinusoid there: " + _rejection(res, "periodic")))
+    res = loops[("ADIS16405 imu1", "gz_dps")]
+    ratio, peak = band_ratio(res, 100.0, 18.0, 22.0)
+    lines.append(f"- **ADIS16405 imu1 gz, 18-22 Hz.** The residual spectrum there is "
+                 f"{ratio:.2f} times its median (peak at {peak:.2f} Hz): a broad band, not a "
+                 "line, which the sinusoid candidates of the loop do not represent.")
+    rec4 = recs["ADIS16405 imu4"][0]
+    spike = rec4.outliers.get("gx_dps", np.array([], dtype=int))
+    gx4 = loops[("ADIS16405 imu4", "gx_dps")]
+    lines.append(
+        f"- **ADIS16405 imu4 disturbance.** The loader reports {len(spike)} outliers in gx_dps "
+        f"(largest |gx| {np.max(np.abs(rec4.column('gx_dps'))):.2f} deg/s, first at sample "
+        f"{spike[0] if len(spike) else 'none'}); the loop on gx keeps "
+        f"{'; '.join(s.effect.describe() for s in gx4.steps) or 'nothing'}.")
+    keep, clip = loops[("MTi-G (outliers kept)", "gyro_x")], loops[("MTi-G (outliers clipped)",
+                                                                    "gyro_x")]
+    lines.append(
+        f"- **MTi-G outliers.** The loader flags {len(mtig_keep.outliers.get('gyro_x', []))} of "
+        f"{mtig_keep.n_samples} samples (more than 10 MAD-sigmas from the median). With them "
+        f"kept the loop keeps {'; '.join(s.effect.describe() for s in keep.steps) or 'nothing'}"
+        f" (one-step MSE {keep.before['mse']:.3g}); clipped, it keeps "
+        f"{'; '.join(s.effect.describe() for s in clip.steps) or 'nothing'} (one-step MSE "
+        f"{clip.before['mse']:.3g}).")
+    return lines
+
+
+def _rejection(res: LoopResult, prefix: str) -> str:
+    rej = [r for r in res.rejected if r["effect"].startswith(prefix)]
+    if rej:
+        ev = rej[0]["evaluation"]
+        return (f"it was tried and rejected on the evaluation segment (one-step gain "
+                f"{ev['one_step_gain']:.2g}, p {ev['one_step_p']:.2g}; outage gain "
+                f"{ev['outage_gain']:.2g}, p {ev['outage_p']:.2g}).")
+    return "no diagnostic pointed to it (none of its tests fired)."
+
+
+# -- README -----------------------------------------------------------------------------------
+
+
+def summary_lines(studies: pd.DataFrame) -> list[str]:
+    col_mse, col_out = "fair, one-step MSE: FOS / best AR", "fair, 30 s outage: FOS / best AR"
+    col_paper = "paper, one-step MSE: FOS / best AR"
+    return [
+        f"- Fair protocol, one-step MSE, FOS over the best AR / Gauss-Markov model, over "
+        f"{len(studies)} axes: median {studies[col_mse].median():.4f}, range "
+        f"{studies[col_mse].min():.4f}-{studies[col_mse].max():.4f}; FOS lower on "
+        f"{int((studies[col_mse] < 1).sum())} axes.",
+        f"- Fair protocol, 30 s outage position error: median ratio "
+        f"{studies[col_out].median():.3f}, range {studies[col_out].min():.3f}-"
+        f"{studies[col_out].max():.3f}; FOS lower on {int((studies[col_out] < 1).sum())} axes.",
+        f"- Paper protocol (baselines on wavelet-denoised data), one-step MSE: FOS over the best "
+        f"baseline, median {studies[col_paper].median():.3g} (range "
+        f"{studies[col_paper].min():.3g}-{studies[col_paper].max():.3g}).",
+    ]
+
+
+def main() -> None:
+    if not DATA.is_dir():
+        print(f"skipping: {DATA} not found (the real recordings are not part of this "
+              "repository; see the README's 'Data and licences')")
+        return
+    recs = records()
+    mtig_keep = load_record(DATA / "mtig_contaminated" / "gyro_x.csv.gz", rate=100)
+    mtig_clip = load_record(DATA / "mtig_contaminated" / "gyro_x.csv.gz", rate=100,
+                            outliers="clip")
+    studies, results = run_studies(recs)
+    allan = run_allan(recs, mtig_keep)
+    loops, loop_results = run_loops(recs, mtig_keep, mtig_clip)
+    temp = temperature_check(recs["MPU-6050 sunsided"][0])
+    OUT.mkdir(parents=True, exist_ok=True)
+    for frame, stem in ((studies, "studies"), (allan, "allan"), (loops, "loops"),
+                        (temp, "temperature")):
+        frame.to_csv(OUT / f"{stem}.csv", index=False)
+    example = paper_table(results[("ADIS16405 imu1", "ay_g")])
+    rel = OUT.relative_to(README.parent)
+    replace_section("real-data", "\n".join([
+        "**Model-order study** (every axis; per axis reports, tables and figures in "
+        f"`{rel}/study/`; all ratios in `{rel}/studies.csv`):", "",
+        *summary_lines(studies), "",
+        markdown_table(studies, digits=4), "",
+        "ADIS16405 imu1 ay_g in the layout of the paper's Table 1 (units g):", "",
+        markdown_table(example, digits=3), "",
+        f"![ADIS16405 imu1 ay_g, fair protocol]({rel}/study/adis16405_imu1/ay_g/order_fair.png)",
+        "", f"**Allan deviation** (fits and figures in `{rel}/allan/`):", "",
+        markdown_table(allan), "",
+        f"**Residual loop** (reports in `{rel}/loop/`):", "",
+        markdown_table(loops, digits=3), "",
+        "**The effects the issue points to**, checked:", "",
+        *named_effects(loop_results, recs, mtig_keep, temp), "",
+        "MPU-6050 (sunsided) with its die temperature added, prediction segment:", "",
+        markdown_table(temp, digits=3)]))
+    print(f"README section real-data rewritten; results in {OUT}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
