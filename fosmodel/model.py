@@ -196,6 +196,7 @@ class FOSModel(BaseEstimator):
                 f"needs {needed} more"
             )
         channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
+        _refuse_own_input(y_arr, channels)
         signals, offsets = self._centred({OUTPUT: y_arr, **channels}, None)
         terms = [t for t in generate_terms(spec) if not t.is_constant]
         pieces = [{k: v[s] for k, v in signals.items()} for s in runs]
@@ -519,6 +520,14 @@ class FOSModel(BaseEstimator):
             raise InputError(f"corrupted model file: {type(exc).__name__}: {exc}") from None
         model.meta_ = dict(data.get("meta") or {})
         return model
+
+
+def _refuse_own_input(y: np.ndarray, channels: Mapping[str, np.ndarray]) -> None:
+    """Refuse an input channel equal to y: its lag 0 would be the very value predicted."""
+    for name, x in channels.items():
+        if np.array_equal(x, y):
+            raise InputError(f"input channel {name!r} is the modelled signal itself: its lag 0 is "
+                             "the value predicted (its past is in max_lag)")
 
 
 def _usable(segments: Sequence[slice] | None, n: int, n0: int) -> list[slice]:

@@ -363,3 +363,9 @@ def test_fit_on_segments_pools_windows_without_crossing_gaps():
         assert np.all(np.isfinite(pred[s.start + 4 : s.stop]))
     with pytest.raises(InputError, match="ordered, non-overlapping"):
         model.predict(y, segments=[slice(0, 800), slice(700, 900)])
+
+
+def test_the_modelled_signal_cannot_be_its_own_input():
+    y = np.random.default_rng(3).standard_normal(500)
+    with pytest.raises(InputError, match="'gx' is the modelled signal itself"):
+        FOSModel(max_lag=2, exog_lags={"gx": 1}).fit(y, {"gx": y.copy()})
