@@ -125,6 +125,8 @@ def _load(args: argparse.Namespace, path: str | None = None,
 
 
 def _add_loader_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--rate", type=_positive_float,
+                        help="sample rate in Hz (if no time column)")
     parser.add_argument("--scale", action="append", metavar="NAME=FACTOR",
                         help="multiply column NAME by FACTOR, e.g. gx=1/131 for raw counts "
                              "(repeatable)")
@@ -210,7 +212,7 @@ def _cmd_predict(args: argparse.Namespace) -> int:
     if not column:
         raise InputError("the model does not say which column it models; pass --column")
     inputs = [*model.spec_.exog_lags, *model.spec_.columns]
-    rec = _load(args, columns=list(dict.fromkeys([column, *inputs])))
+    rec = _load(args, columns=[column, *inputs])
     y = rec.column(column)
     channels = {name: rec.column(name) for name in inputs}
     pred = model.predict(y, channels, segments=rec.segments)
@@ -506,7 +508,6 @@ def build_parser() -> argparse.ArgumentParser:
     fit = sub.add_parser("fit", help="fit a FOS model to one column of a record")
     fit.add_argument("file", help="CSV, .npy or .parquet record")
     fit.add_argument("--column", required=True, help="column to model")
-    fit.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
     _add_loader_options(fit)
     fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L (default 10)")
     fit.add_argument("--degree", type=int, default=1, help="CP, cross-product degree (default 1)")
@@ -524,7 +525,6 @@ def build_parser() -> argparse.ArgumentParser:
     pred.add_argument("file", help="CSV, .npy or .parquet record")
     pred.add_argument("--model", required=True, help="model file written by 'fosmodel fit'")
     pred.add_argument("--column", help="column to predict (default: the one the model was fit on)")
-    pred.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
     _add_loader_options(pred)
     pred.add_argument("--out", required=True, help="CSV to write")
     pred.set_defaults(func=_cmd_predict)
@@ -535,7 +535,6 @@ def build_parser() -> argparse.ArgumentParser:
                             "a report directory per file and column")
     study.add_argument("--columns", "--column", dest="columns", type=_name_list, required=True,
                        metavar="COL[,COL...]", help="columns to model, in every file")
-    study.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
     _add_loader_options(study)
     study.add_argument("--sensor", required=True, choices=("accel", "gyro"))
     study.add_argument("--units", required=True,
@@ -572,7 +571,6 @@ def build_parser() -> argparse.ArgumentParser:
                           "add it, report the error before and after")
     loop.add_argument("file", help="CSV, .npy or .parquet record")
     loop.add_argument("--column", required=True, help="column to model")
-    loop.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
     _add_loader_options(loop)
     loop.add_argument("--aux", nargs="+", metavar="COL",
                       help="columns that may explain the residual (default: every other column)")
@@ -590,7 +588,6 @@ def build_parser() -> argparse.ArgumentParser:
                            "IEEE Std 952 noise coefficients")
     allan.add_argument("file", help="CSV, .npy or .parquet record")
     allan.add_argument("--column", required=True, help="column to analyse (a rate signal)")
-    allan.add_argument("--rate", type=_positive_float, help="sample rate in Hz (if no time column)")
     _add_loader_options(allan)
     allan.add_argument("--sensor", choices=("accel", "gyro"), help="for navigation units")
     allan.add_argument("--units", help="units of the column (with --sensor)")
