@@ -24,6 +24,17 @@ def _controller() -> ThreadpoolController:
 
 @contextmanager
 def one_blas_thread() -> Iterator[None]:
-    """Limit BLAS to one thread inside the ``with`` block (a few microseconds)."""
-    with _controller().limit(limits=1, user_api="blas"):
+    """Limit BLAS to one thread inside the ``with`` block (a few microseconds).
+
+    Only the libraries not already at one thread are touched, so nested
+    blocks cost two reads of the thread count.
+    """
+    blas = [lib for lib in _controller().lib_controllers if lib.user_api == "blas"]
+    changed = [(lib, n) for lib in blas if (n := lib.num_threads) != 1]
+    for lib, _ in changed:
+        lib.set_num_threads(1)
+    try:
         yield
+    finally:
+        for lib, n in changed:
+            lib.set_num_threads(n)

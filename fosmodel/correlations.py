@@ -26,7 +26,6 @@ import threading
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from .blas import one_blas_thread
 from .candidates import OUTPUT, Term
@@ -108,20 +107,24 @@ class LagCorrelations:
         self._lmin = np.where(self._ch >= 0, self._lag, n0).min(axis=1)
         self._pair = self._join(self._ch, self._lag, width)  # buffers for Gram columns
         # everything the search needs before its first step, in one batch:
-        # mean(y), mean(y^2), mean(p_c), mean(y p_c), mean(p_c^2)
+        # mean(y), mean(y^2), mean(p_c), mean(y p_c), mean(p_c^2), and the Gram
+        # columns of the linear candidates when they are few (see _linear_rows)
         k = len(terms)
-        ch0 = np.full((2 + 3 * k, 2 * width), -1, dtype=np.int64)
+        linear, ch_lin, lag_lin = self._linear_rows(width)
+        ch0 = np.full((2 + 3 * k + len(ch_lin), 2 * width), -1, dtype=np.int64)
         lag0 = np.zeros_like(ch0)
         ch0[0, 0] = ch0[1, :2] = 0  # y is channel 0 at lag 0
-        ch0[2 : 2 + k, :width], lag0[2 : 2 + k, :width] = self._ch, self._lag
-        ch0[2 + k : 2 + 2 * k, :width], lag0[2 + k : 2 + 2 * k, :width] = self._ch, self._lag
+        for i in range(3):
+            rows = slice(2 + i * k, 2 + (i + 1) * k)
+            ch0[rows, :width], lag0[rows, :width] = self._ch, self._lag
         ch0[2 + k : 2 + 2 * k, width] = 0
-        ch0[2 + 2 * k :, :width], lag0[2 + 2 * k :, :width] = self._ch, self._lag
-        ch0[2 + 2 * k :, width:], lag0[2 + 2 * k :, width:] = self._ch, self._lag
+        ch0[2 + 2 * k : 2 + 3 * k, width:] = self._ch
+        lag0[2 + 2 * k : 2 + 3 * k, width:] = self._lag
+        ch0[2 + 3 * k :, : width + 1], lag0[2 + 3 * k :, : width + 1] = ch_lin, lag_lin
         first = self._moments(ch0, lag0)
         self.y_mean, self.y_mean_sq = float(first[0]), float(first[1])
-        self.means, self.target, self.diag = np.split(first[2:], 3)
-        self._columns = self._linear_block(width)
+        self.means, self.target, self.diag = np.split(first[2 : 2 + 3 * k], 3)
+        self._columns = dict(zip(linear.tolist(), first[2 + 3 * k :].reshape(len(linear), k)))
 
     def column(self, j: int) -> np.ndarray:
         """mean(p_c p_j) for every candidate c."""
@@ -130,27 +133,29 @@ class LagCorrelations:
         return self._moments(*self._pair, extra=(self._ch[j], self._lag[j]),
                              lmin=np.minimum(self._lmin, self._lmin[j]))
 
-    def _linear_block(self, width: int) -> dict[int, np.ndarray]:
-        """Gram columns of all linear candidates, in one batch, when they are small and tabular.
+    def _linear_rows(self, width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The linear candidates whose Gram columns are tabulated at once, and their rows.
 
         A linear candidate's column holds moments of degree at most width + 1,
         all table lookups when that is within ``table_degree``; for up to
         ``_BLOCK`` linear candidates (a search selects most of them) one batch
         costs less than a call per search step.  With more, the search needs
-        only a few of their columns, and fetches those.
+        only a few of their columns, and fetches those.  Returns the
+        candidates' indices and the (channel, lag) rows of their columns,
+        ``width + 1`` factors each.
         """
         linear = np.flatnonzero((self._ch >= 0).sum(axis=1) == 1)
         k = len(self._ch)
         if width + 1 > self._table_degree or not 0 < len(linear) <= _BLOCK:
-            return {}
+            empty = np.empty((0, width + 1), dtype=np.int64)
+            return linear[:0], empty, empty
         ch = np.empty((len(linear) * k, width + 1), dtype=np.int64)
         lag = np.empty_like(ch)
         ch[:, :width] = np.tile(self._ch, (len(linear), 1))
         lag[:, :width] = np.tile(self._lag, (len(linear), 1))
         ch[:, width] = np.repeat(self._ch[linear, 0], k)
         lag[:, width] = np.repeat(self._lag[linear, 0], k)
-        values = self._moments(ch, lag).reshape(len(linear), k)
-        return dict(zip(linear.tolist(), values))
+        return linear, ch, lag
 
     # -- moments ---------------------------------------------------------------------------
 
@@ -190,7 +195,9 @@ class LagCorrelations:
         if not table.all():
             table |= degree <= self._table_degree
             maybe = ~table & (degree <= len(self._radix))
-            if maybe.any():  # tabulate a high-degree shape only if it serves several products
+            if extra is None:  # without a common factor, a direct sum costs a table entry's dot
+                table |= maybe
+            elif maybe.any():  # tabulate a high-degree shape only if it serves several products
                 uniq, counts = np.unique(keys[maybe], return_counts=True)
                 table |= np.isin(keys, uniq[counts > 1])
             new = table & (slot < 0)
@@ -266,9 +273,8 @@ class LagCorrelations:
         n0 = self._n0
         if n0 == 0:
             return np.zeros((0, 1))
-        first = lo - n0
-        segment = np.concatenate([np.zeros(max(-first, 0)), u[max(first, 0) : lo + n0]])
-        return sliding_window_view(segment, n0 + 1)[:, ::-1]
+        t = lo + np.arange(n0)[:, None] - np.arange(n0 + 1)
+        return np.where(t >= 0, u[np.maximum(t, 0)], 0.0)
 
     def _walk(self, prefixes, lo: int, hi: int, root: np.ndarray | None = None):
         """Yield ``(prefix, product)`` over ``t = lo..hi-1`` for each prefix, in sorted order.
@@ -294,15 +300,11 @@ class LagCorrelations:
     def _add_shapes(self, codes: np.ndarray, keys: np.ndarray) -> None:
         """Tabulate new shapes: their sum over the window and the sums near each end."""
         n, n0, stride = self._n, self._n0, self._stride
-        groups: dict[tuple, list] = {}
-        for i, row in enumerate(codes.tolist()):
-            prefix, last = self._split_last_run([divmod(c - 1, stride) for c in row if c])
-            groups.setdefault(prefix, []).append((i, last))
+        groups = self._group_by_prefix(codes)
         core = np.empty(len(codes))
         for prefix, g in self._walk(groups, n0, n):  # prefix products over the window
-            for i, last in groups[prefix]:
-                f = self._power(*last, n0, n)
-                core[i] = f.sum() if g is None else g @ f
+            for (ch, k), (rows, rels) in groups[prefix].items():
+                core[rows] = self._lagged_sums(g, ch, k, rels)
         # near the ends: products of every shape at once, then cumulative sums
         ch, rel = np.divmod(codes - 1, stride)
         ch[codes == 0], rel[codes == 0] = len(self._u), 0  # absent factor: the ones channel
@@ -318,6 +320,52 @@ class LagCorrelations:
         slots = np.concatenate([self._slots, base + np.arange(len(codes))])
         order = np.argsort(keys, kind="stable")
         self._keys, self._slots = keys[order], slots[order]
+
+    def _group_by_prefix(self, codes: np.ndarray) -> dict[tuple, dict[tuple, tuple]]:
+        """Shapes grouped by their factors but the last (its square if it repeats), then by
+        the last factor's channel and power: ``{prefix: {(ch, k): (rows, rels)}}``.
+
+        ``codes`` rows are sorted, absent factors (0) first; see :meth:`_split_last_run`.
+        """
+        width = codes.shape[1]
+        last = codes[:, -1]
+        power = np.ones(len(codes), dtype=np.int64)
+        if width > 1:
+            power += (codes[:, -2] == last) & (last > 0)
+        prefix = codes.copy()
+        prefix[:, -1] = 0
+        prefix[power == 2, -2] = 0
+        prefix.sort(axis=1)
+        ch, rel = np.divmod(last - 1, self._stride)
+        ch[last == 0] = -1  # the empty product
+        key = np.stack([prefix @ self._radix[len(self._radix) - width :], ch, power])
+        order = np.lexsort(key[::-1])
+        bounds = np.flatnonzero((np.diff(key[:, order], axis=1) != 0).any(axis=0)) + 1
+        groups: dict[tuple, dict[tuple, tuple]] = {}
+        for rows in np.split(order, bounds):
+            i = rows[0]
+            name = tuple(divmod(c - 1, self._stride) for c in prefix[i].tolist() if c)
+            groups.setdefault(name, {})[(int(ch[i]), int(power[i]))] = (rows, rel[rows])
+        return groups
+
+    def _lagged_sums(self, g: np.ndarray | None, ch: int, k: int, rels: np.ndarray) -> np.ndarray:
+        """``sum_t g(t) u_ch(t - rel)^k`` over the window for each ``rel`` (``g`` None: ones).
+
+        Several lags of one signal are one correlation (a dot product per lag
+        in C) when they fill at least half of their range.
+        """
+        n0, n = self._n0, self._n
+        src = None if ch < 0 else ch
+        lo, hi = int(rels.min()), int(rels.max())
+        if g is None or len(rels) == 1 or hi - lo + 1 > 2 * len(rels):
+            sums = []
+            for r in rels.tolist():
+                f = self._power(src, r, k, n0, n)
+                sums.append(f.sum() if g is None else g @ f)
+            return np.array(sums)
+        # u(t - hi)^k for t = n0 .. n - 1 + hi - lo: correlation lag j is rel = hi - j
+        series = self._power(src, hi, k, n0, n + hi - lo)
+        return np.correlate(series, g, "valid")[hi - rels]
 
     def _direct_sums(self, ch, lag, weight, products=False):
         """Sum each row's product times ``weight`` over the window, sharing partial products.
