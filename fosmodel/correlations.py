@@ -195,9 +195,7 @@ class LagCorrelations:
         if not table.all():
             table |= degree <= self._table_degree
             maybe = ~table & (degree <= len(self._radix))
-            if extra is None:  # without a common factor, a direct sum costs a table entry's dot
-                table |= maybe
-            elif maybe.any():  # tabulate a high-degree shape only if it serves several products
+            if maybe.any():  # tabulate a high-degree shape only if it serves several products
                 uniq, counts = np.unique(keys[maybe], return_counts=True)
                 table |= np.isin(keys, uniq[counts > 1])
             new = table & (slot < 0)
@@ -339,7 +337,7 @@ class LagCorrelations:
         ch, rel = np.divmod(last - 1, self._stride)
         ch[last == 0] = -1  # the empty product
         key = np.stack([prefix @ self._radix[len(self._radix) - width :], ch, power])
-        order = np.lexsort(key[::-1])
+        order = np.lexsort((rel, *key[::-1]))  # lags ascending within a group
         bounds = np.flatnonzero((np.diff(key[:, order], axis=1) != 0).any(axis=0)) + 1
         groups: dict[tuple, dict[tuple, tuple]] = {}
         for rows in np.split(order, bounds):
@@ -349,14 +347,15 @@ class LagCorrelations:
         return groups
 
     def _lagged_sums(self, g: np.ndarray | None, ch: int, k: int, rels: np.ndarray) -> np.ndarray:
-        """``sum_t g(t) u_ch(t - rel)^k`` over the window for each ``rel`` (``g`` None: ones).
+        """``sum_t g(t) u_ch(t - rel)^k`` over the window for each ``rel`` (ascending; ``g``
+        None: ones).
 
         Several lags of one signal are one correlation (a dot product per lag
         in C) when they fill at least half of their range.
         """
         n0, n = self._n0, self._n
         src = None if ch < 0 else ch
-        lo, hi = int(rels.min()), int(rels.max())
+        lo, hi = rels[0].item(), rels[-1].item()
         if g is None or len(rels) == 1 or hi - lo + 1 > 2 * len(rels):
             sums = []
             for r in rels.tolist():
