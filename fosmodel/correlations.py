@@ -15,6 +15,10 @@ cross-products) have few repeated shapes; they are summed directly over the
 window, sharing partial products through a prefix tree, so that the N x C
 candidate matrix is never formed.
 
+Which moments come from the tables, and how shapes are keyed and grouped,
+does not depend on the data: :mod:`fosmodel.shapes` plans it, once per
+candidate set for the batch every fit starts with.  This module does the sums.
+
 :class:`LagCorrelations` is the fast provider for :func:`fosmodel.fos._fos_kernel`;
 the point-by-point reference is :class:`fosmodel.fos._DataCorrelations` on the
 matrix from :func:`fosmodel.candidates.evaluate_terms`.
@@ -29,8 +33,8 @@ import numpy as np
 
 from .blas import one_blas_thread
 from .candidates import OUTPUT, Term
+from .shapes import Batch, layout, plan_batch
 
-_BLOCK = 16  # most linear candidates whose Gram columns are tabulated at once
 _GEMM_SAMPLES = 200_000  # from this window length, weighted sums of pairs go through BLAS
 _CHUNK = 4096  # samples per block of those sums: the block's factors stay in cache
 _SCRATCH = threading.local()
@@ -75,22 +79,13 @@ class LagCorrelations:
         *,
         table_degree: int = 3,
     ) -> None:
-        names = [OUTPUT, *sorted({ch for t in terms for ch, _ in t.factors} - {OUTPUT})]
-        n = len(signals[OUTPUT])
-        n0 = start
+        plan = layout(tuple(t.factors for t in terms), start, table_degree)
+        n, n0 = len(signals[OUTPUT]), start
         self._n, self._n0 = n, n0
         self.n_samples = n - n0
-        self._stride = n0 + 1
-        self._u = [np.ascontiguousarray(signals[ch], dtype=float) for ch in names]
-        width = max([t.degree for t in terms] + [1])
-        self._ch = np.full((len(terms), width), -1, dtype=np.int64)
-        self._lag = np.zeros((len(terms), width), dtype=np.int64)
-        index = {ch: i for i, ch in enumerate(names)}
-        for i, t in enumerate(terms):
-            for k, (ch, lag) in enumerate(t.factors):
-                self._ch[i, k], self._lag[i, k] = index[ch], lag or 0
-        self._table_degree = table_degree
-        self._radix = self._key_radix(len(names) * self._stride + 1, 2 * width, table_degree)
+        self._geo = plan.geometry
+        self._u = [np.ascontiguousarray(signals[ch], dtype=float) for ch in plan.names]
+        self._ch, self._lag, self._lmin = plan.ch, plan.lag, plan.lmin
         self._plans: dict[tuple, dict] = {}
         self._squares: dict[int, np.ndarray] = {}
         self._keys = np.empty(0, dtype=np.int64)  # tabulated shape keys, sorted
@@ -103,111 +98,46 @@ class LagCorrelations:
         ones = np.ones((1, n0, n0 + 1))
         self._heads = np.concatenate([[self._edge_matrix(u, 0) for u in self._u], ones])
         self._tails = np.concatenate([[self._edge_matrix(u, n - n0) for u in self._u], ones])
-
-        self._lmin = np.where(self._ch >= 0, self._lag, n0).min(axis=1)
-        self._pair = self._join(self._ch, self._lag, width)  # buffers for Gram columns
-        # everything the search needs before its first step, in one batch:
-        # mean(y), mean(y^2), mean(p_c), mean(y p_c), mean(p_c^2), and the Gram
-        # columns of the linear candidates when they are few (see _linear_rows)
+        width = self._ch.shape[1]
+        pad = np.full((len(terms), width), -1, dtype=np.int64)  # row buffers for Gram columns
+        self._pair = np.hstack([self._ch, pad]), np.hstack([self._lag, np.zeros_like(pad)])
+        # everything the search needs before its first step, in one planned batch
         k = len(terms)
-        linear, ch_lin, lag_lin = self._linear_rows(width)
-        ch0 = np.full((2 + 3 * k + len(ch_lin), 2 * width), -1, dtype=np.int64)
-        lag0 = np.zeros_like(ch0)
-        ch0[0, 0] = ch0[1, :2] = 0  # y is channel 0 at lag 0
-        for i in range(3):
-            rows = slice(2 + i * k, 2 + (i + 1) * k)
-            ch0[rows, :width], lag0[rows, :width] = self._ch, self._lag
-        ch0[2 + k : 2 + 2 * k, width] = 0
-        ch0[2 + 2 * k : 2 + 3 * k, width:] = self._ch
-        lag0[2 + 2 * k : 2 + 3 * k, width:] = self._lag
-        ch0[2 + 3 * k :, : width + 1], lag0[2 + 3 * k :, : width + 1] = ch_lin, lag_lin
-        first = self._moments(ch0, lag0)
+        first = self._apply(plan.first, *plan.rows)
         self.y_mean, self.y_mean_sq = float(first[0]), float(first[1])
         self.means, self.target, self.diag = np.split(first[2 : 2 + 3 * k], 3)
-        self._columns = dict(zip(linear.tolist(), first[2 + 3 * k :].reshape(len(linear), k)))
+        self._columns = dict(zip(plan.linear.tolist(),
+                                 first[2 + 3 * k :].reshape(len(plan.linear), k)))
 
     def column(self, j: int) -> np.ndarray:
         """mean(p_c p_j) for every candidate c."""
         if j in self._columns:
             return self._columns[j]
-        return self._moments(*self._pair, extra=(self._ch[j], self._lag[j]),
-                             lmin=np.minimum(self._lmin, self._lmin[j]))
-
-    def _linear_rows(self, width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The linear candidates whose Gram columns are tabulated at once, and their rows.
-
-        A linear candidate's column holds moments of degree at most width + 1,
-        all table lookups when that is within ``table_degree``; for up to
-        ``_BLOCK`` linear candidates (a search selects most of them) one batch
-        costs less than a call per search step.  With more, the search needs
-        only a few of their columns, and fetches those.  Returns the
-        candidates' indices and the (channel, lag) rows of their columns,
-        ``width + 1`` factors each.
-        """
-        linear = np.flatnonzero((self._ch >= 0).sum(axis=1) == 1)
-        k = len(self._ch)
-        if width + 1 > self._table_degree or not 0 < len(linear) <= _BLOCK:
-            empty = np.empty((0, width + 1), dtype=np.int64)
-            return linear[:0], empty, empty
-        ch = np.empty((len(linear) * k, width + 1), dtype=np.int64)
-        lag = np.empty_like(ch)
-        ch[:, :width] = np.tile(self._ch, (len(linear), 1))
-        lag[:, :width] = np.tile(self._lag, (len(linear), 1))
-        ch[:, width] = np.repeat(self._ch[linear, 0], k)
-        lag[:, width] = np.repeat(self._lag[linear, 0], k)
-        return linear, ch, lag
+        ch, lag = self._pair
+        w = self._ch.shape[1]
+        ch[:, -w:], lag[:, -w:] = self._ch[j], self._lag[j]
+        batch = plan_batch(self._geo, ch, lag, np.minimum(self._lmin, self._lmin[j]),
+                           self._keys, self._slots)
+        return self._apply(batch, ch, lag, extra=(self._ch[j], self._lag[j]))
 
     # -- moments ---------------------------------------------------------------------------
 
-    @staticmethod
-    def _join(ch: np.ndarray, lag: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray]:
-        """Row buffers holding the factors of each row followed by ``width`` free slots."""
-        pad = np.full((len(ch), width), -1, dtype=np.int64)
-        return np.hstack([ch, pad]), np.hstack([lag, np.zeros_like(pad)])
+    def _apply(self, batch: Batch, ch, lag, extra=None) -> np.ndarray:
+        """Window means of the products given row-wise by (channel, lag), as ``batch`` plans.
 
-    @staticmethod
-    def _key_radix(base: int, width: int, table_degree: int) -> np.ndarray:
-        """Powers of ``base`` to encode shapes of up to ``width`` factors in an int64."""
-        while width > table_degree and base ** width >= 2**62:
-            width -= 1
-        return base ** np.arange(max(width, 1), dtype=np.int64)
-
-    def _moments(self, ch, lag, extra=None, lmin=None) -> np.ndarray:
-        """Window means of products given row-wise by (channel, lag); channel -1 = none.
-
-        ``extra`` is one factor row ``(channels, lags)`` common to every product
-        (the selected term of a Gram column): it fills the free slots of the
-        row buffers ``ch``, ``lag``.  A product comes from the shape tables if
-        its degree is at most ``table_degree``, or if its shape is already
-        tabulated or repeats within the batch; otherwise it is summed directly,
-        with the common factors as a shared weight.
+        ``extra`` is the factor row ``(channels, lags)`` common to every product
+        (the selected term of a Gram column), in the last slots of each row;
+        directly summed rows use it as a shared weight.
         """
-        if extra is not None:
-            w = len(extra[0])
-            ch[:, -w:], lag[:, -w:] = extra
-        present = ch >= 0
-        degree = present.sum(axis=1)
-        if lmin is None:
-            lmin = np.where(present, lag, self._n0).min(axis=1)
-        keys, codes = self._shape_keys(ch, lag, present, lmin)
-        slot = self._lookup(keys)
-        table = slot >= 0
-        if not table.all():
-            table |= degree <= self._table_degree
-            maybe = ~table & (degree <= len(self._radix))
-            if maybe.any():  # tabulate a high-degree shape only if it serves several products
-                uniq, counts = np.unique(keys[maybe], return_counts=True)
-                table |= np.isin(keys, uniq[counts > 1])
-            new = table & (slot < 0)
-            if new.any():
-                uniq, first = np.unique(keys[new], return_index=True)
-                self._add_shapes(codes[new][first], uniq)
-                slot = self._lookup(keys)
+        if batch.new is not None:
+            self._add_shapes(batch)
+        lmin, table = batch.lmin, batch.table
         if table.all():
-            out = self._core[slot] + self._head[slot, self._n0 - lmin] - self._tail[slot, lmin]
+            s = batch.slot
+            out = self._core[s] + self._head[s, self._n0 - lmin] - self._tail[s, lmin]
             return out / self.n_samples
         out = np.empty(len(ch))
-        s, lo = slot[table], lmin[table]
+        s, lo = batch.slot, lmin[table]
         out[table] = self._core[s] + self._head[s, self._n0 - lo] - self._tail[s, lo]
         direct = ~table
         if extra is None:
@@ -217,25 +147,6 @@ class LagCorrelations:
             weight = self._direct_sums(extra[0][None], extra[1][None], None, products=True)[0]
             out[direct] = self._direct_sums(ch[direct, :-w], lag[direct, :-w], weight)
         return out / self.n_samples
-
-    def _lookup(self, keys: np.ndarray) -> np.ndarray:
-        """Table row of each shape key, -1 where not tabulated."""
-        if not len(self._keys):
-            return np.full(len(keys), -1, dtype=np.intp)
-        pos = np.minimum(np.searchsorted(self._keys, keys), len(self._keys) - 1)
-        return np.where(self._keys[pos] == keys, self._slots[pos], -1)
-
-    def _shape_keys(self, ch, lag, present, lmin):
-        """Integer key of each row's shape (negative where it has too many factors to encode)."""
-        code = ch * self._stride + (lag - lmin[:, None] + 1)
-        code[~present] = 0
-        code.sort(axis=1)
-        width = len(self._radix)
-        if code.shape[1] <= width:
-            return code @ self._radix[width - code.shape[1] :], code
-        fits = ~code[:, :-width].any(axis=1)
-        code = code[:, -width:]
-        return np.where(fits, code @ self._radix, -1 - np.arange(len(code))), code
 
     def _factor(self, ch: int, rel: int, lo: int, hi: int) -> np.ndarray:
         """u_ch(t - rel) for t = lo..hi-1, a view (needs lo >= rel)."""
@@ -295,56 +206,23 @@ class LagCorrelations:
                 stack.append((prefix[: depth + 1], prod))
             yield prefix, stack[-1][1]
 
-    def _add_shapes(self, codes: np.ndarray, keys: np.ndarray) -> None:
-        """Tabulate new shapes: their sum over the window and the sums near each end."""
-        n, n0, stride = self._n, self._n0, self._stride
-        groups = self._group_by_prefix(codes)
-        core = np.empty(len(codes))
-        for prefix, g in self._walk(groups, n0, n):  # prefix products over the window
-            for (ch, k), (rows, rels) in groups[prefix].items():
+    def _add_shapes(self, batch: Batch) -> None:
+        """Tabulate the batch's new shapes: their sum over the window and near each end."""
+        n, n0, new = self._n, self._n0, batch.new
+        core = np.empty(len(new.ch))
+        for prefix, g in self._walk(new.groups, n0, n):  # prefix products over the window
+            for (ch, k), (rows, rels) in new.groups[prefix].items():
                 core[rows] = self._lagged_sums(g, ch, k, rels)
         # near the ends: products of every shape at once, then cumulative sums
-        ch, rel = np.divmod(codes - 1, stride)
-        ch[codes == 0], rel[codes == 0] = len(self._u), 0  # absent factor: the ones channel
-        head = np.zeros((len(codes), n0 + 1))  # head[a] = sum_{t=a}^{N0-1}
-        head[:, :n0] = np.cumsum(self._heads[ch, :, rel].prod(axis=1)[:, ::-1], axis=1)[:, ::-1]
-        tail = np.zeros((len(codes), n0 + 1))  # tail[b] = sum_{t=N-b}^{N-1}
-        tail[:, 1:] = np.cumsum(self._tails[ch, :, rel].prod(axis=1)[:, ::-1], axis=1)
-        base = len(self._core)
+        head = np.zeros((len(core), n0 + 1))  # head[a] = sum_{t=a}^{N0-1}
+        head[:, :n0] = np.cumsum(
+            self._heads[new.ch, :, new.rel].prod(axis=1)[:, ::-1], axis=1)[:, ::-1]
+        tail = np.zeros((len(core), n0 + 1))  # tail[b] = sum_{t=N-b}^{N-1}
+        tail[:, 1:] = np.cumsum(self._tails[new.ch, :, new.rel].prod(axis=1)[:, ::-1], axis=1)
         self._core = np.concatenate([self._core, core])
         self._head = np.concatenate([self._head, head])
         self._tail = np.concatenate([self._tail, tail])
-        keys = np.concatenate([self._keys, keys])
-        slots = np.concatenate([self._slots, base + np.arange(len(codes))])
-        order = np.argsort(keys, kind="stable")
-        self._keys, self._slots = keys[order], slots[order]
-
-    def _group_by_prefix(self, codes: np.ndarray) -> dict[tuple, dict[tuple, tuple]]:
-        """Shapes grouped by their factors but the last (its square if it repeats), then by
-        the last factor's channel and power: ``{prefix: {(ch, k): (rows, rels)}}``.
-
-        ``codes`` rows are sorted, absent factors (0) first; see :meth:`_split_last_run`.
-        """
-        width = codes.shape[1]
-        last = codes[:, -1]
-        power = np.ones(len(codes), dtype=np.int64)
-        if width > 1:
-            power += (codes[:, -2] == last) & (last > 0)
-        prefix = codes.copy()
-        prefix[:, -1] = 0
-        prefix[power == 2, -2] = 0
-        prefix.sort(axis=1)
-        ch, rel = np.divmod(last - 1, self._stride)
-        ch[last == 0] = -1  # the empty product
-        key = np.stack([prefix @ self._radix[len(self._radix) - width :], ch, power])
-        order = np.lexsort((rel, *key[::-1]))  # lags ascending within a group
-        bounds = np.flatnonzero((np.diff(key[:, order], axis=1) != 0).any(axis=0)) + 1
-        groups: dict[tuple, dict[tuple, tuple]] = {}
-        for rows in np.split(order, bounds):
-            i = rows[0]
-            name = tuple(divmod(c - 1, self._stride) for c in prefix[i].tolist() if c)
-            groups.setdefault(name, {})[(int(ch[i]), int(power[i]))] = (rows, rel[rows])
-        return groups
+        self._keys, self._slots = batch.keys, batch.slots
 
     def _lagged_sums(self, g: np.ndarray | None, ch: int, k: int, rels: np.ndarray) -> np.ndarray:
         """``sum_t g(t) u_ch(t - rel)^k`` over the window for each ``rel`` (ascending; ``g``
@@ -397,7 +275,7 @@ class LagCorrelations:
             return False
         if (ch[:, :2] < 0).any():
             return False
-        n_factors = len(np.unique(ch[:, :2] * self._stride + lag[:, :2]))
+        n_factors = len(np.unique(ch[:, :2] * self._geo.stride + lag[:, :2]))
         return 4 * len(ch) >= n_factors**2
 
     def _weighted_gram_sums(self, ch, lag, weight: np.ndarray) -> np.ndarray:
