@@ -17,30 +17,7 @@ import numpy as np
 
 from data_synth.base import Source, as_float_tuple, check_column_name
 from data_synth.units import RATE_UNITS, density_to_arw, random_walk_step, rate_factor, white_sigma
-
-
-def correlation_matrix(corr: float | np.ndarray, m: int) -> np.ndarray:
-    """An ``m x m`` correlation matrix: equicorrelated for a scalar ``rho``, else checked.
-
-    Raises
-    ------
-    ValueError
-        If the matrix is not symmetric with unit diagonal and positive
-        semi-definite (for a scalar: unless ``-1/(m-1) <= rho <= 1``).
-    """
-    if np.ndim(corr) == 0:
-        c = np.full((m, m), float(corr))
-        np.fill_diagonal(c, 1.0)
-    else:
-        c = np.asarray(corr, dtype=float)
-    if c.shape != (m, m) or not np.allclose(c, c.T) or not np.allclose(np.diag(c), 1.0):
-        raise ValueError(f"need a symmetric {m}x{m} correlation matrix with unit diagonal")
-    if np.linalg.eigvalsh(c).min() < -1e-12:
-        raise ValueError(
-            "correlation matrix is not positive semi-definite"
-            + (f" (equicorrelation needs rho >= {-1 / (m - 1):.6g})" if np.ndim(corr) == 0 else "")
-        )
-    return c
+from fosmodel.arrays import correlation
 
 
 def correlated_normal(n: int, corr: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -67,7 +44,7 @@ class _ArrayNoise(Source):
             densities = densities * len(channels)
         if len(densities) != len(channels) or len(set(channels)) != len(channels):
             raise ValueError(f"{self.label}: need distinct channels and one density each")
-        corr = correlation_matrix(self.corr, len(channels))
+        corr = correlation(len(channels), self.corr)
         object.__setattr__(self, "channels", channels)
         object.__setattr__(self, "densities", densities)
         object.__setattr__(self, "corr", tuple(tuple(float(x) for x in row) for row in corr))

@@ -9,27 +9,26 @@ from data_synth.arrays import (
     CorrelatedRandomWalk,
     CorrelatedWhiteNoise,
     correlated_normal,
-    correlation_matrix,
 )
 from data_synth.record import source_rng
+from fosmodel.arrays import correlation
 
 Z = 4.5
 NAMES = tuple(f"gyro_{i}" for i in range(1, 9))
 
 
-def test_equicorrelation_matrix_and_its_bound():
-    c = correlation_matrix(-0.1, 8)
-    assert c.shape == (8, 8) and np.all(np.diag(c) == 1) and c[0, 5] == -0.1
-    correlation_matrix(-1 / 7, 8)  # the limit of seed 004 eq. 6.38 is allowed
+def test_array_sources_refuse_an_impossible_correlation():
+    # the check is fosmodel.arrays.correlation's (tested there); the sources apply it
+    CorrelatedWhiteNoise(NAMES, (0.1,), corr=-1 / 7)  # the limit of seed 004 eq. 6.38
     with pytest.raises(ValueError, match="rho >= -0.142857"):
-        correlation_matrix(-0.2, 8)
-    with pytest.raises(ValueError):
-        correlation_matrix(np.array([[1.0, 0.5], [0.4, 1.0]]), 2)
+        CorrelatedWhiteNoise(NAMES, (0.1,), corr=-0.2)
+    with pytest.raises(ValueError, match="symmetric"):
+        CorrelatedRandomWalk(NAMES[:2], (0.1,), corr=[[1.0, 0.5], [0.4, 1.0]])
 
 
 def test_correlated_draws_have_the_requested_correlation():
     n = 100_000
-    target = correlation_matrix(0.3, 4)
+    target = correlation(4, 0.3)
     target[0, 1] = target[1, 0] = -0.2
     z = correlated_normal(n, target, source_rng(0, "c"))
     est = np.corrcoef(z.T)
