@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fosmodel.candidates import OUTPUT, Term, evaluate_terms
+from fosmodel.candidates import OUTPUT, Term, evaluate_sum
 
 Factor = tuple[str, int]
 Factors = tuple[Factor, ...]
@@ -47,8 +47,8 @@ def evaluate(
     first = max([lag or 0 for t, _ in entries for _, lag in t.factors] + [0])
     out = np.full(len(signals[OUTPUT]), np.nan)
     if entries:
-        values = evaluate_terms([t for t, _ in entries], signals, first)
-        out[first:] = values @ np.array([c for _, c in entries])
+        out[first:] = evaluate_sum([t for t, _ in entries], [c for _, c in entries], signals,
+                                   first)
     else:
         out[first:] = 0.0
     return out

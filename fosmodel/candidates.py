@@ -260,9 +260,34 @@ def evaluate_terms(
     for j, term in enumerate(terms):
         col = np.ones(n - start)
         for ch, lag in term.factors:
-            lag = lag or 0
-            if lag > start:
-                raise InputError(f"term {term.name!r} needs {lag} past samples, only {start} given")
-            col *= signals[ch][start - lag : n - lag]
+            col *= _window(term, signals, ch, lag, start, n)
         out[:, j] = col
     return out
+
+
+def evaluate_sum(
+    terms: Sequence[Term], weights: Sequence[float], signals: Mapping[str, np.ndarray],
+    start: int,
+) -> np.ndarray:
+    """``evaluate_terms(terms, signals, start) @ weights``, one term at a time.
+
+    It holds two arrays of ``N - start`` values, never the ``N x len(terms)``
+    matrix: a prediction over hours of samples costs memory for one signal.
+    """
+    n = len(next(iter(signals.values())))
+    total = np.zeros(n - start)
+    value = np.empty(n - start)
+    for term, w in zip(terms, weights):
+        value.fill(w)
+        for ch, lag in term.factors:
+            value *= _window(term, signals, ch, lag, start, n)
+        total += value
+    return total
+
+
+def _window(term: Term, signals: Mapping[str, np.ndarray], ch: str, lag, start: int, n: int):
+    """``signals[ch][t - lag]`` for ``t = start .. n-1``."""
+    lag = lag or 0
+    if lag > start:
+        raise InputError(f"term {term.name!r} needs {lag} past samples, only {start} given")
+    return signals[ch][start - lag : n - lag]

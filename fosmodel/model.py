@@ -30,6 +30,7 @@ from .candidates import (
     Term,
     check_terms_fit_spec,
     count_candidates,
+    evaluate_sum,
     evaluate_terms,
     generate_terms,
 )
@@ -280,7 +281,7 @@ class FOSModel(BaseEstimator):
         out = np.full(n, np.nan)
         for run in _usable(segments, n, n0):
             piece = {k: v[run] for k, v in signals.items()}
-            values = evaluate_terms(self._terms, piece, n0) @ self.coef_
+            values = evaluate_sum(self._terms, self.coef_, piece, n0)
             out[run.start + n0 : run.stop] = values + self.intercept_ + self.offsets_[OUTPUT]
         if isinstance(y, pd.Series):
             return pd.Series(out, index=y.index, name="prediction")

@@ -8,6 +8,7 @@ from fosmodel.candidates import (
     Term,
     check_terms_fit_spec,
     count_candidates,
+    evaluate_sum,
     evaluate_terms,
     generate_terms,
 )
@@ -91,6 +92,19 @@ def test_evaluate_terms_point_by_point():
     np.testing.assert_array_equal(out[:, 1], y[n - 1])
     np.testing.assert_array_equal(out[:, 2], y[n - 2] ** 2)
     np.testing.assert_array_equal(out[:, 3], y[n - 1] * x[n])
+
+
+def test_evaluate_sum_equals_the_matrix_times_the_weights():
+    rng = np.random.default_rng(4)
+    signals = {"y": rng.standard_normal(500), "x": rng.standard_normal(500), "c": np.ones(500)}
+    names = ["1", "y[n-1]", "y[n-2]^2", "y[n-1]*x[n-0]", "x[n-3]*y[n-3]^2", "c"]
+    terms = [Term.parse(n) for n in names]
+    w = rng.standard_normal(len(terms))
+    want = evaluate_terms(terms, signals, 3) @ w
+    np.testing.assert_allclose(evaluate_sum(terms, w, signals, 3), want, rtol=1e-13, atol=1e-13)
+    assert evaluate_sum([], [], signals, 3).tolist() == [0.0] * 497
+    with pytest.raises(InputError, match="needs 3 past samples, only 2"):
+        evaluate_sum(terms, w, signals, 2)
 
 
 def test_terms_outside_spec_are_rejected():
