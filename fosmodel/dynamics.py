@@ -65,7 +65,7 @@ def free_run_inputs(
         ``y_init`` shorter than the lag window, ``n_steps`` not a non-negative integer,
         or ``noise`` of another length.
     """
-    past = as_signal(y_init, "y_init")
+    past = as_signal(y_init, "y_init", last=lag_window)  # only these reach the run
     if len(past) < lag_window:
         raise InputError(f"y_init has {len(past)} samples; the model needs at least {lag_window}")
     if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or n_steps < 0:

@@ -16,8 +16,11 @@ def did_you_mean(name: str, options: Iterable[str]) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
-def as_signal(values: object, name: str) -> np.ndarray:
+def as_signal(values: object, name: str, last: int | None = None) -> np.ndarray:
     """A finite 1-D float64 array from a numpy array, list or pandas Series.
+
+    ``last`` checks only the last ``last`` samples for NaN/inf: those a free
+    run reads of a long past.
 
     Raises
     ------
@@ -30,14 +33,14 @@ def as_signal(values: object, name: str) -> np.ndarray:
         raise InputError(f"{name} is not numeric: {exc}") from None
     if arr.ndim != 1:
         raise InputError(f"{name} must be one-dimensional, got shape {arr.shape}")
-    if np.isfinite(arr).all():
+    skip = 0 if last is None else max(len(arr) - last, 0)
+    finite = np.isfinite(arr[skip:])
+    if finite.all():
         return arr
-    bad = np.flatnonzero(~np.isfinite(arr))
-    if bad.size:
-        raise InputError(
-            f"{name} has {bad.size} non-finite value(s) (NaN or inf), first at sample {bad[0]}"
-        )
-    return arr
+    bad = skip + np.flatnonzero(~finite)
+    raise InputError(
+        f"{name} has {bad.size} non-finite value(s) (NaN or inf), first at sample {bad[0]}"
+    )
 
 
 def as_channels(

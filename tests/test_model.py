@@ -189,6 +189,18 @@ def test_linear_free_run_uses_the_filter_and_matches_recursion():
     assert abs(sim[-1] - (model.offsets_["y"] + model.intercept_ / (1 - model.coef_.sum()))) < 1e-3
 
 
+def test_free_run_checks_only_the_past_it_reads():
+    rng = np.random.default_rng(5)
+    y = lfilter([1.0], [1.0, -1.2, 0.4], rng.standard_normal(3000))
+    model = FOSModel(max_lag=4).fit(y)
+    damaged = y[:500].copy()
+    damaged[10] = np.nan  # far before the 4 samples a run after sample 500 reads
+    np.testing.assert_array_equal(model.simulate(damaged, 50), model.simulate(y[:500], 50))
+    damaged[497] = np.inf
+    with pytest.raises(InputError, match="y_init has 1 non-finite value.*first at sample 497"):
+        model.simulate(damaged, 50)
+
+
 def test_unstable_model_is_reported_not_simulated_silently():
     rng = np.random.default_rng(4)
     y = np.cumsum(np.cumsum(rng.standard_normal(3000)))  # integrated twice: roots at 1

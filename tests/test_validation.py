@@ -1,0 +1,36 @@
+"""Checks on in-memory signals: the messages name the signal and the sample."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from fosmodel.exceptions import InputError
+from fosmodel.validation import as_signal
+
+
+def test_as_signal_takes_arrays_lists_and_series():
+    for values in ([1, 2, 3], np.arange(1, 4), pd.Series([1.0, 2.0, 3.0])):
+        out = as_signal(values, "y")
+        assert out.dtype == float and out.tolist() == [1.0, 2.0, 3.0]
+
+
+@pytest.mark.parametrize("values, message", [
+    ([[1.0, 2.0]], "y must be one-dimensional, got shape \\(1, 2\\)"),
+    (["a", "b"], "y is not numeric"),
+    ([1.0, np.nan, np.inf, 2.0], "y has 2 non-finite value.* first at sample 1"),
+])
+def test_as_signal_names_the_problem(values, message):
+    with pytest.raises(InputError, match=message):
+        as_signal(values, "y")
+
+
+def test_last_checks_only_the_last_samples_and_names_the_absolute_sample():
+    values = np.arange(10.0)
+    values[2] = np.nan
+    assert np.isnan(as_signal(values, "past", last=5)[2])  # outside the checked tail
+    assert len(as_signal(values, "past", last=0)) == 10
+    values[8] = np.inf
+    with pytest.raises(InputError, match="past has 1 non-finite .* first at sample 8"):
+        as_signal(values, "past", last=5)
+    with pytest.raises(InputError, match="first at sample 2"):
+        as_signal(values, "past", last=50)  # longer than the signal: all of it
