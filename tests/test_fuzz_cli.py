@@ -17,6 +17,7 @@ import io
 import json
 import lzma
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -380,12 +381,18 @@ def test_there_are_a_few_hundred_cases():
     assert len({case[0] for case in CASES}) == len(CASES)
 
 
-@pytest.mark.parametrize("case", CASES, ids=[case[0] for case in CASES])
-def test_every_command_refuses_a_malformed_record(case, work, capsys):
+def _write_case(case: tuple, work: Path) -> tuple[Path, str | None]:
+    """Write a damaged file ``(id, filename, bytes, expected text)``; its path and the text."""
     name, filename, data, expected = case
     path = work / "in" / name / filename
     path.parent.mkdir(parents=True)
     path.write_bytes(data)
+    return path, expected
+
+
+@pytest.mark.parametrize("case", CASES, ids=[case[0] for case in CASES])
+def test_every_command_refuses_a_malformed_record(case, work, capsys):
+    path, expected = _write_case(case, work)
     for command, argv in _commands(path, work / "model.json", work / "out").items():
         line = _run_fails_cleanly(argv, work, capsys)
         assert str(path) in line, (command, line)
@@ -402,10 +409,7 @@ MODEL_CASES = _model_json(np.random.default_rng(11), MODEL)
 
 @pytest.mark.parametrize("case", MODEL_CASES, ids=[case[0] for case in MODEL_CASES])
 def test_predict_refuses_a_damaged_model_file(case, work, capsys):
-    name, filename, data, expected = case
-    path = work / "in" / name / filename
-    path.parent.mkdir(parents=True)
-    path.write_bytes(data)
+    path, expected = _write_case(case, work)
     line = _run_fails_cleanly(["predict", str(work / "good.csv"), "--model", str(path),
                                "--out", str(work / "out" / "pred.csv")], work, capsys)
     assert str(path) in line and expected in line, line
