@@ -377,12 +377,11 @@ class FOSModel(BaseEstimator):
             y_lags = [lag for ch, lag in term.factors if ch == OUTPUT]
             rest = Term(tuple(f for f in term.factors if f[0] != OUTPUT))
             if not y_lags:
-                drive = drive + c * evaluate_terms([rest], signals, start)[:, 0]
+                drive = drive + evaluate_sum([rest], [c], signals, start)
             elif term.degree == 1:
                 ar[y_lags[0] - 1] = c
             else:
-                nonlinear.append((c * evaluate_terms([rest], signals, start)[:, 0],
-                                  np.asarray(y_lags)))
+                nonlinear.append((evaluate_sum([rest], [c], signals, start), np.asarray(y_lags)))
         return ar, nonlinear, drive
 
     @staticmethod
