@@ -6,6 +6,7 @@ benchmarks/<script>.py`` puts ``benchmarks/`` on the path).
 
 from __future__ import annotations
 
+import math
 import os
 import platform
 import time
@@ -48,23 +49,36 @@ def machine_line() -> str:
 
 def interleaved_best(
     fns: Mapping[str, Callable[[], object]], repeats: int,
-    few: Mapping[str, int] | None = None,
+    few: Mapping[str, int] | None = None, loop_s: float = 0.02,
 ) -> dict[str, float]:
-    """Best wall time of each function, timed round-robin so that they share the machine's noise.
+    """Best time per call of each function, timed round-robin to share the machine's noise.
 
-    ``few`` caps the repeats of slow functions: ``{"frols": 3}`` times it only
-    in the first 3 rounds.
+    As ``timeit`` does, each round runs a function in a loop of consecutive
+    calls lasting at least ``loop_s`` seconds (one call for slow functions)
+    and takes the loop's mean; the result is the best round.  Timing single
+    calls of a fast function right after a slow one would charge it the
+    caches and page faults the slow one left behind.  ``few`` caps the rounds
+    of slow functions: ``{"frols": 3}`` times it only in the first 3 rounds.
     """
     few = few or {}
+    number = {name: _calls_per_loop(fn, loop_s) for name, fn in fns.items()}
     best = dict.fromkeys(fns, np.inf)
     for round_ in range(repeats):
         for name, fn in fns.items():
             if round_ >= few.get(name, repeats):
                 continue
             t0 = time.perf_counter()
-            fn()
-            best[name] = min(best[name], time.perf_counter() - t0)
+            for _ in range(number[name]):
+                fn()
+            best[name] = min(best[name], (time.perf_counter() - t0) / number[name])
     return best
+
+
+def _calls_per_loop(fn: Callable[[], object], loop_s: float) -> int:
+    """Calls that make a loop last at least ``loop_s`` seconds, from one timed call."""
+    t0 = time.perf_counter()
+    fn()
+    return max(1, math.ceil(loop_s / max(time.perf_counter() - t0, 1e-9)))
 
 
 def loglog_slope(x, y) -> float:

@@ -6,7 +6,7 @@ search needs from tables of lagged-signal correlations with end corrections
 ``FOSModel(correlations="reference")`` builds the N x C candidate matrix with
 :func:`fosmodel.candidates.evaluate_terms` and runs the same kernel on it point
 by point (:class:`fosmodel.fos._DataCorrelations`).  Both are timed through
-``fit`` (``stop="max_terms"``), interleaved, best of ``--repeats``; the script
+``fit`` (``stop="max_terms"``), interleaved, best of ``--repeats`` loops; the script
 checks that they select the same terms in the same order and that their
 weights agree to 1e-8 relative to the largest weight (exit code 1 if not).
 
@@ -69,7 +69,8 @@ def main() -> None:
     limit = limit_blas(args.blas_threads)  # noqa: F841 - the limit holds while it is referenced
     repeats = 2 if args.quick else args.repeats
     print(machine_line())
-    print(f"best of {repeats} interleaved repeats; stop='max_terms'\n")
+    print(f"best of {repeats} interleaved rounds, each the mean of a loop of calls lasting at "
+          "least 20 ms; stop='max_terms'\n")
     header = (f"{'N':>8} {'L':>3} {'CP':>2} {'exog':<6} {'cands':>5} {'k':>3} {'fast ms':>8} "
               f"{'ref ms':>9} {'ref/fast':>8} | {'build ms':>8} {'fos(X) ms':>9} "
               f"{'Gram ms':>8} | {'same terms':>10} {'coef rel diff':>13}")

@@ -4,8 +4,11 @@ The data are the paper's training window: 36,000 samples (3 minutes at 200 Hz)
 of an AR-type signal.  Two signals are used: an AR(4) process (seed 000
 models accelerometer errors as AR(4); the coefficients here are our choice),
 and the first 3 minutes of the paper-like accelerometer record of
-``data_synth``.  Every time is the best of several repeats, interleaved with
-the times it is compared with (these machines are noisy).  FOS is always timed
+``data_synth``.  Every time is the best of several rounds, interleaved with
+the times it is compared with (these machines are noisy); in each round a
+function runs in a loop of consecutive calls lasting at least 20 ms and its
+time is the loop's mean, as ``timeit`` does (a single fast call right after
+FROLS would pay for the caches and fresh pages FROLS left behind).  FOS is always timed
 through ``FOSModel(...).fit``: candidate generation, correlations, search and
 coefficients.
 
@@ -16,8 +19,8 @@ FOS runs with its default stopping rule (``korenberg``) and at full order
 (``max_terms = L``: as many weights as Burg estimates).  ``FOS ms`` is a fit
 of a candidate set fitted before in the process (the usual case in a study:
 the same orders on many records); ``1st ms`` is the first fit of a candidate
-set, which also plans its correlation tables (``fosmodel.shapes.layout``,
-cached per candidate set like an FFT plan).
+set, which also plans its correlation tables (``fosmodel.shapes.layout`` and
+``direct_groups``, cached per candidate set like an FFT plan).
 
 Table 2, FOS against FROLS (sysidentpy) on the identical candidate set (lags
 1..L of y and their products up to CP), asked for the k terms FOS selects
@@ -61,7 +64,7 @@ from data_synth import make_scenario
 from fosmodel import FOSModel, fos
 from fosmodel.candidates import CandidateSpec, evaluate_terms, generate_terms
 from fosmodel.fos import center
-from fosmodel.shapes import layout
+from fosmodel.shapes import clear_plans
 
 N = 36_000
 
@@ -109,7 +112,7 @@ def omp_matrix(y: np.ndarray, lag: int, degree: int) -> tuple[np.ndarray, np.nda
 
 def cold_fit(model: FOSModel, signal: np.ndarray) -> None:
     """Fit as the first fit of its candidate set in the process (no cached layout)."""
-    layout.cache_clear()
+    clear_plans()
     model.fit(signal)
 
 
@@ -248,7 +251,8 @@ def main() -> None:
     if not args.quick:
         signals["paper"] = paper_signal()
     print(machine_line())
-    print(f"N = {N} samples; best of {repeats} interleaved repeats (FROLS: fewer)\n")
+    print(f"N = {N} samples; best of {repeats} interleaved rounds (FROLS: fewer), each the mean "
+          "of a loop of calls lasting at least 20 ms\n")
 
     burg_ratios = burg_table(signals, (1, 10) if args.quick else (1, 5, 10, 20), repeats)
     print()

@@ -28,12 +28,13 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Mapping, Sequence
+from functools import lru_cache
 
 import numpy as np
 
 from .blas import one_blas_thread
 from .candidates import OUTPUT, Term
-from .shapes import Batch, layout, plan_batch
+from .shapes import Batch, direct_groups, layout, plan_batch
 
 _GEMM_SAMPLES = 200_000  # from this window length, weighted sums of pairs go through BLAS
 _CHUNK = 4096  # samples per block of those sums: the block's factors stay in cache
@@ -53,6 +54,14 @@ def _scratch(depth: int, size: int) -> np.ndarray:
     if buf is None or len(buf) != size:
         buf = buffers[depth] = np.empty(size)
     return buf
+
+
+@lru_cache(maxsize=64)
+def _edge_index(n0: int) -> np.ndarray:
+    """``N0 + i - rel`` for i < N0 (rows) and rel <= N0 (columns)."""
+    index = n0 + np.arange(n0)[:, None] - np.arange(n0 + 1)
+    index.flags.writeable = False
+    return index
 
 
 class LagCorrelations:
@@ -86,7 +95,6 @@ class LagCorrelations:
         self._geo = plan.geometry
         self._u = [np.ascontiguousarray(signals[ch], dtype=float) for ch in plan.names]
         self._ch, self._lag, self._lmin = plan.ch, plan.lag, plan.lmin
-        self._plans: dict[tuple, dict] = {}
         self._squares: dict[int, np.ndarray] = {}
         self._keys = np.empty(0, dtype=np.int64)  # tabulated shape keys, sorted
         self._slots = np.empty(0, dtype=np.intp)  # their rows in the tables
@@ -95,17 +103,13 @@ class LagCorrelations:
         self._tail = np.empty((0, n0 + 1))
         # the signals near each end of the window, E[ch, i, rel] = u_ch(lo + i - rel), with
         # one more "channel" of ones for absent factors
-        ones = np.ones((1, n0, n0 + 1))
-        self._heads = np.concatenate([[self._edge_matrix(u, 0) for u in self._u], ones])
-        self._tails = np.concatenate([[self._edge_matrix(u, n - n0) for u in self._u], ones])
-        width = self._ch.shape[1]
-        pad = np.full((len(terms), width), -1, dtype=np.int64)  # row buffers for Gram columns
-        self._pair = np.hstack([self._ch, pad]), np.hstack([self._lag, np.zeros_like(pad)])
+        self._heads, self._tails = self._edges(0), self._edges(n - n0)
+        self._pair: tuple[np.ndarray, np.ndarray] | None = None  # row buffers for Gram columns
         # everything the search needs before its first step, in one planned batch
         k = len(terms)
         first = self._apply(plan.first, *plan.rows)
         self.y_mean, self.y_mean_sq = float(first[0]), float(first[1])
-        self.means, self.target, self.diag = np.split(first[2 : 2 + 3 * k], 3)
+        self.means, self.target, self.diag = first[2 : 2 + 3 * k].reshape(3, k)
         self._columns = dict(zip(plan.linear.tolist(),
                                  first[2 + 3 * k :].reshape(len(plan.linear), k)))
 
@@ -113,8 +117,11 @@ class LagCorrelations:
         """mean(p_c p_j) for every candidate c."""
         if j in self._columns:
             return self._columns[j]
-        ch, lag = self._pair
         w = self._ch.shape[1]
+        if self._pair is None:
+            pad = np.full((len(self._ch), w), -1, dtype=np.int64)
+            self._pair = np.hstack([self._ch, pad]), np.hstack([self._lag, np.zeros_like(pad)])
+        ch, lag = self._pair
         ch[:, -w:], lag[:, -w:] = self._ch[j], self._lag[j]
         batch = plan_batch(self._geo, ch, lag, np.minimum(self._lmin, self._lmin[j]),
                            self._keys, self._slots)
@@ -144,7 +151,7 @@ class LagCorrelations:
             out[direct] = self._direct_sums(ch[direct], lag[direct], None)
         else:
             w = len(extra[0])
-            weight = self._direct_sums(extra[0][None], extra[1][None], None, products=True)[0]
+            weight = self._product(*extra)
             out[direct] = self._direct_sums(ch[direct, :-w], lag[direct, :-w], weight)
         return out / self.n_samples
 
@@ -165,25 +172,16 @@ class LagCorrelations:
             self._squares[ch] = np.square(self._u[ch])
         return self._squares[ch][lo - rel : hi - rel]
 
-    @staticmethod
-    def _split_last_run(factors: list) -> tuple[tuple, tuple]:
-        """Split sorted factors into a prefix and a last factor or, if it repeats, its square.
-
-        ``[(0, 0), (0, 3), (0, 3)]`` -> ``(((0, 0),), (0, 3, 2))``: y(t) times y(t-3)^2,
-        which saves forming one product over the window.
-        """
-        if not factors:
-            return (), (None, 0, 0)
-        k = 2 if len(factors) > 1 and factors[-2] == factors[-1] else 1
-        return tuple(factors[:-k]), (*factors[-1], k)
-
-    def _edge_matrix(self, u: np.ndarray, lo: int) -> np.ndarray:
-        """E[i, rel] = u(lo + i - rel) for i < N0, rel <= N0 (zero before the record starts)."""
+    def _edges(self, lo: int) -> np.ndarray:
+        """E[ch, i, rel] = u_ch(lo + i - rel) for i < N0, rel <= N0 (zero before the record
+        starts), and a last channel of ones."""
         n0 = self._n0
-        if n0 == 0:
-            return np.zeros((0, 1))
-        t = lo + np.arange(n0)[:, None] - np.arange(n0 + 1)
-        return np.where(t >= 0, u[np.maximum(t, 0)], 0.0)
+        near = np.zeros((len(self._u) + 1, 2 * n0))  # near[ch, m] = u_ch(lo - N0 + m)
+        skip = max(n0 - lo, 0)
+        for row, u in zip(near, self._u):
+            row[skip:] = u[lo - n0 + skip : lo + n0]
+        near[-1] = 1.0
+        return near[:, _edge_index(n0)]
 
     def _walk(self, prefixes, lo: int, hi: int, root: np.ndarray | None = None):
         """Yield ``(prefix, product)`` over ``t = lo..hi-1`` for each prefix, in sorted order.
@@ -234,6 +232,8 @@ class LagCorrelations:
         n0, n = self._n0, self._n
         src = None if ch < 0 else ch
         lo, hi = rels[0].item(), rels[-1].item()
+        if g is None and k == 2 and src is not None:  # sums of squares, without forming them
+            return np.array([f @ f for f in (self._factor(src, r, n0, n) for r in rels.tolist())])
         if g is None or len(rels) == 1 or hi - lo + 1 > 2 * len(rels):
             sums = []
             for r in rels.tolist():
@@ -244,24 +244,25 @@ class LagCorrelations:
         series = self._power(src, hi, k, n0, n + hi - lo)
         return np.correlate(series, g, "valid")[hi - rels]
 
-    def _direct_sums(self, ch, lag, weight, products=False):
-        """Sum each row's product times ``weight`` over the window, sharing partial products.
+    def _product(self, ch: np.ndarray, lag: np.ndarray) -> np.ndarray:
+        """The product of the factors (channel, lag) over the window, a new array."""
+        out = np.ones(self.n_samples)
+        for c, k in zip(ch.tolist(), lag.tolist()):
+            if c >= 0:
+                out *= self._factor(c, k, self._n0, self._n)
+        return out
 
-        With ``products=True`` return the products themselves instead of their sums.
-        """
-        if weight is not None and not products and self._use_gram(ch, lag):
+    def _direct_sums(self, ch, lag, weight):
+        """Sum each row's product times ``weight`` over the window, sharing partial products
+        and summing the lags of a row's last factor as one correlation where they are dense."""
+        if weight is not None and self._use_gram(ch, lag):
             return self._weighted_gram_sums(ch, lag, weight)
-        plan = self._direct_plan(ch, lag)
-        out: list = [None] * len(ch)
-        for prefix, g in self._walk(plan, self._n0, self._n, weight):
-            rows, factors = plan[prefix]
-            if products:
-                values = [f if g is None else g * f for f in factors]
-            else:
-                values = [f.sum() if g is None else g @ f for f in factors]
-            for i, v in zip(rows, values):
-                out[i] = v
-        return out if products else np.asarray(out, dtype=float)
+        groups = direct_groups(ch, lag)
+        out = np.empty(len(ch))
+        for prefix, g in self._walk(groups, self._n0, self._n, weight):
+            for (c, k), (rows, lags) in groups[prefix].items():
+                out[rows] = self._lagged_sums(g, c, k, lags)
+        return out
 
     def _use_gram(self, ch: np.ndarray, lag: np.ndarray) -> bool:
         """Whether :meth:`_weighted_gram_sums` beats one dot product per row.
@@ -295,26 +296,6 @@ class LagCorrelations:
                 x = np.stack([self._factor(c, k, lo, hi) for c, k in factors.tolist()])
                 gram += (x * weight[lo - n0 : hi - n0]) @ x.T
         return gram[index[:, 0], index[:, 1]]
-
-    def _direct_plan(self, ch, lag) -> dict[tuple, tuple[list[int], list[np.ndarray]]]:
-        """Rows grouped by their factors but the last, with the last factor's window slice.
-
-        The plan depends only on the rows, and a Gram column's directly summed
-        rows are the same every time, so plans are cached.
-        """
-        key = (ch.tobytes(), lag.tobytes(), ch.shape)
-        plan = self._plans.get(key)
-        if plan is None:
-            n, n0 = self._n, self._n0
-            plan = {}
-            for i, (r_ch, r_lag) in enumerate(zip(ch.tolist(), lag.tolist())):
-                row = sorted((c, lag) for c, lag in zip(r_ch, r_lag) if c >= 0)
-                prefix, last = self._split_last_run(row)
-                rows, factors = plan.setdefault(prefix, ([], []))
-                rows.append(i)
-                factors.append(self._power(*last, n0, n))
-            self._plans[key] = plan
-        return plan
 
 
 class PooledCorrelations:

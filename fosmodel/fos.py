@@ -247,8 +247,10 @@ def _fos_kernel(
 
     active = np.ones(n_cand, dtype=bool)
     dependent = np.zeros(n_cand, dtype=bool)
+    live_floor = floor.copy()  # floor, -inf once a candidate is selected or dependent
+    q_all = np.empty(n_cand)  # Q of the active candidates, -inf for the others
     d_hist = np.empty((max(cap, 0), n_cand))  # D(c, r) for each selected r
-    d_sel = np.empty(max(cap, 0))  # D(r, r)
+    a_hist = np.empty((max(cap, 0), n_cand))  # alpha_cr = D(c, r) / D(r, r)
     support: list[int] = []
     g: list[float] = []
     q_path: list[float] = []
@@ -260,14 +262,16 @@ def _fos_kernel(
         if threshold is not None and mse <= threshold:
             reason = stop.kind
             break
-        newly = active & (d_rem <= floor)
+        newly = d_rem <= live_floor
         if newly.any():
             dependent |= newly
             active &= ~newly
+            live_floor[newly] = -np.inf
             if not active.any():
                 reason = "exhausted"
                 break
-        q_all = np.divide(c_rem * c_rem, d_rem, out=np.full(n_cand, -np.inf), where=active)
+        q_all[~active] = -np.inf
+        np.divide(c_rem * c_rem, d_rem, out=q_all, where=active)
         j = int(np.argmax(q_all))
         q = float(q_all[j])
         mse_new = max(mse - q, 0.0)
@@ -285,18 +289,19 @@ def _fos_kernel(
             ic, k_params = ic_new, k_params + 1
             ic_path.append(ic)
         r = len(support)
-        col = corr.column(j) - means * means[j]
-        d_col = col - d_hist[:r].T @ (d_hist[:r, j] / d_sel[:r])  # eq. 19
+        d_col = corr.column(j) - means * means[j]
+        if r:
+            d_col -= a_hist[:r].T @ d_hist[:r, j]  # eq. 19
         d_jj = d_col[j]
+        active[j], live_floor[j] = False, -np.inf
         if not d_jj > floor[j]:  # fresher than d_rem[j]; guard rounding
-            dependent[j], active[j] = True, False
+            dependent[j] = True
             continue
-        d_hist[r], d_sel[r] = d_col, d_jj
-        alpha = d_col / d_jj  # eq. 20
+        d_hist[r] = d_col
+        alpha = np.divide(d_col, d_jj, out=a_hist[r])  # eq. 20
         g_j = c_rem[j] / d_jj  # eq. 23
         d_rem -= alpha * d_col
         c_rem -= alpha * c_rem[j]
-        active[j] = False
         support.append(j)
         g.append(g_j)
         q_path.append(q)
@@ -307,7 +312,7 @@ def _fos_kernel(
     sel = np.asarray(support, dtype=np.intp)
     g_arr = np.asarray(g)
     # eqs. 24-25: a = A^{-T} g with A the unit lower-triangular matrix of alpha_{s_i, s_r}
-    alpha_sel = (d_hist[:m, sel] / d_sel[:m, None]).T if m else np.empty((0, 0))
+    alpha_sel = a_hist[:m, sel].T if m else np.empty((0, 0))
     coef = (solve_triangular(alpha_sel.T, g_arr, lower=False, unit_diagonal=True,
                              check_finite=False) if m else g_arr)
     a0 = float(y_mean - means[sel] @ coef) if intercept else 0.0

@@ -249,3 +249,47 @@ def _linear_rows(ch: np.ndarray, lag: np.ndarray, table_degree: int):
     rows_ch[:, width] = np.repeat(ch[linear, 0], k)
     rows_lag[:, width] = np.repeat(lag[linear, 0], k)
     return linear, rows_ch, rows_lag
+
+
+def direct_groups(ch: np.ndarray, lag: np.ndarray) -> dict[tuple, dict[tuple, tuple]]:
+    """Rows summed directly, grouped as :meth:`Geometry.group_by_prefix` groups shapes.
+
+    ``{prefix: {(ch, k): (rows, lags)}}``: a row's sorted factors (channel,
+    lag) but the last (its square, ``k = 2``, if it repeats) form the prefix;
+    ``lags`` are the last factor's lags, ascending; channel -1 is the empty
+    product.  Unlike shapes, these rows may be too wide to encode as keys,
+    so they are grouped by their factors.  Cached: a Gram column's directly
+    summed rows are the same in every fit of a candidate set (read-only).
+    """
+    ch, lag = np.asarray(ch, dtype=np.int64), np.asarray(lag, dtype=np.int64)
+    return _direct_groups(ch.tobytes(), lag.tobytes(), ch.shape)
+
+
+@lru_cache(maxsize=4096)
+def _direct_groups(ch_bytes: bytes, lag_bytes: bytes, shape: tuple[int, int]) -> dict:
+    ch = np.frombuffer(ch_bytes, dtype=np.int64).reshape(shape)
+    lag = np.frombuffer(lag_bytes, dtype=np.int64).reshape(shape)
+    groups: dict[tuple, dict[tuple, tuple[list, list]]] = {}
+    for i, (r_ch, r_lag) in enumerate(zip(ch.tolist(), lag.tolist())):
+        row = sorted((c, g) for c, g in zip(r_ch, r_lag) if c >= 0)
+        k = 2 if len(row) > 1 and row[-2] == row[-1] else 1
+        c, g = row[-1] if row else (-1, 0)
+        rows, lags = groups.setdefault(tuple(row[:-k]), {}).setdefault((c, k), ([], []))
+        rows.append(i)
+        lags.append(g)
+    out: dict[tuple, dict[tuple, tuple]] = {}
+    for prefix, by_last in groups.items():
+        out[prefix] = {}
+        for key, (rows, lags) in by_last.items():
+            order = np.argsort(lags, kind="stable")
+            pair = np.asarray(rows, dtype=np.intp)[order], np.asarray(lags, dtype=np.int64)[order]
+            for a in pair:
+                a.flags.writeable = False
+            out[prefix][key] = pair
+    return out
+
+
+def clear_plans() -> None:
+    """Forget the cached layouts and direct groups (to time a first fit, as benchmarks do)."""
+    layout.cache_clear()
+    _direct_groups.cache_clear()

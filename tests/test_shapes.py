@@ -6,7 +6,7 @@ import pytest
 from fosmodel.candidates import CandidateSpec, evaluate_terms, generate_terms
 from fosmodel.correlations import LagCorrelations
 from fosmodel.fos import _DataCorrelations
-from fosmodel.shapes import Geometry, layout, lookup, plan_batch
+from fosmodel.shapes import Geometry, direct_groups, layout, lookup, plan_batch
 
 
 def _rows(*products):
@@ -61,6 +61,23 @@ def test_group_by_prefix_rebuilds_every_shape():
                 rebuilt[row] = sorted([*prefix, *[(c, rel)] * k])
     for i, row in enumerate(codes.tolist()):
         assert rebuilt[i] == sorted(divmod(x - 1, geo.stride) for x in row if x)
+
+
+def test_direct_groups_rebuild_every_row_and_sort_the_last_lags():
+    wide = [(0, k) for k in range(8)]  # too wide for a shape key: grouped all the same
+    ch, lag = _rows([(0, 3), (0, 9)], [(0, 3), (0, 4)], [(0, 3), (0, 3)], [(0, 3)],
+                    [(1, 2), (0, 7), (0, 3)], wide, [(1, 5), (1, 5), (0, 1)], [])
+    groups = direct_groups(ch, lag)
+    rebuilt = {}
+    for prefix, lasts in groups.items():
+        for (c, k), (rows, lags) in lasts.items():
+            assert list(lags) == sorted(lags) and not rows.flags.writeable
+            for row, g in zip(rows.tolist(), lags.tolist()):
+                rebuilt[row] = sorted([*prefix, *[(c, g)] * k]) if c >= 0 else list(prefix)
+    for i, (r_ch, r_lag) in enumerate(zip(ch.tolist(), lag.tolist())):
+        assert rebuilt[i] == sorted((c, g) for c, g in zip(r_ch, r_lag) if c >= 0)
+    assert groups[((0, 3),)][(0, 1)][1].tolist() == [4, 9]  # y(t-3) y(t-4), y(t-3) y(t-9)
+    assert direct_groups(ch, lag) is groups  # cached
 
 
 def test_plan_tabulates_low_degree_and_repeated_shapes_only():
