@@ -334,12 +334,11 @@ def center(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     mean = a.mean(axis=0)
     out = a - mean
-    constant = np.ptp(a, axis=0) == 0
-    if a.ndim == 1:
-        if constant:
-            out[:] = 0.0
-    else:
-        out[:, constant] = 0.0
+    if len(a):
+        cols, out_cols = a.reshape(len(a), -1), out.reshape(len(a), -1)  # views
+        maybe = np.flatnonzero(cols[0] == cols[-1])  # a column whose ends differ varies
+        if len(maybe):
+            out_cols[:, maybe[np.ptp(cols[:, maybe], axis=0) == 0]] = 0.0
     return out, mean
 
 

@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 
 from fosmodel.exceptions import InputError
-from fosmodel.fos import StopRule, _DataCorrelations, _fos_kernel, _GramCorrelations, criterion, fos
+from fosmodel.fos import (
+    StopRule,
+    _DataCorrelations,
+    _fos_kernel,
+    _GramCorrelations,
+    center,
+    criterion,
+    fos,
+)
 
 
 def _problem(seed, n=400, c=30, k=5, noise=0.1, correlated=True):
@@ -193,3 +201,21 @@ def test_kernel_runs_on_any_provider():
     a = _fos_kernel(_DataCorrelations(Xc, yc), StopRule("max_terms", max_terms=5))
     b = _fos_kernel(_GramCorrelations.from_data(Xc, yc), StopRule("max_terms", max_terms=5))
     assert a.support.tolist() == b.support.tolist()
+
+
+def test_center_makes_exactly_constant_signals_and_columns_zero():
+    rng = np.random.default_rng(3)
+    varying = rng.standard_normal(50)
+    same_ends = varying.copy()
+    same_ends[-1] = same_ends[0]  # equal ends, varies in between
+    const = np.full(50, 0.1)  # its mean does not round back to 0.1: a - mean is not 0
+    assert (center(const)[0] == 0.0).all()
+    for sig in (varying, same_ends):
+        out, mean = center(sig)
+        assert mean == sig.mean() and np.array_equal(out, sig - sig.mean()) and out.any()
+    X = np.column_stack([varying, const, same_ends, const * -3.0])
+    for arr in (X, np.asfortranarray(X)):
+        out, mean = center(arr)
+        assert np.array_equal(mean, arr.mean(axis=0))
+        assert (out[:, [1, 3]] == 0.0).all()
+        assert np.array_equal(out[:, [0, 2]], (arr - arr.mean(axis=0))[:, [0, 2]])
