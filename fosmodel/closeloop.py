@@ -70,12 +70,6 @@ class LoopConfig:
         Level of each diagnostic test.
     accept_alpha : float
         Level of the evaluation-segment test that keeps an effect.
-    min_gain : float
-        Smallest relative reduction of the evaluation segment's one-step or
-        outage mean square error that keeps an effect, besides the test.  On
-        long records the test finds effects far too small to matter, and such
-        an effect, extrapolated beyond the evaluation segment (a trend, a
-        step's level), can cost more than it gained there.
     max_effects : int
         Most effects added.
     aux_max_lag : int
@@ -98,7 +92,6 @@ class LoopConfig:
     evaluate: float = 0.2
     alpha: float = 1e-3
     accept_alpha: float = 0.01
-    min_gain: float = 0.005
     max_effects: int = 5
     aux_max_lag: int = 10
     nonlinear_lags: int = 4
@@ -120,8 +113,6 @@ class LoopConfig:
                              "fractions of the record adding up to less than 1")
         if isinstance(self.max_lag, bool) or int(self.max_lag) != self.max_lag or self.max_lag < 1:
             raise InputError(f"max_lag must be an integer >= 1, got {self.max_lag!r}")
-        if not 0 <= self.min_gain < 1:
-            raise InputError(f"min_gain must be a fraction in [0, 1), got {self.min_gain!r}")
 
 
 @dataclass
@@ -319,7 +310,7 @@ def _compare(a: BoundModel, b: BoundModel, y, segment: slice, config: LoopConfig
     free-run errors.  With no effect, ``beta`` is centred
     on 0 (the candidate was fit on other samples).  ``b`` is kept if either test
     is significant at ``accept_alpha / 2`` (one-sided) and the same errors' mean
-    square is lower with ``b`` by more than the fraction ``min_gain``.
+    square is lower with ``b``.
     """
     stop = segment.stop
     pa, pb = a.predict(y[:stop])[segment], b.predict(y[:stop])[segment]
@@ -338,7 +329,7 @@ def _compare(a: BoundModel, b: BoundModel, y, segment: slice, config: LoopConfig
     for name, (beta, t, p) in (("one_step", one_step), ("outage", outage)):
         out.update({f"{name}_gain": gains[name], f"{name}_beta": beta, f"{name}_t": t,
                     f"{name}_p": p})
-    out["accepted"] = any(out[f"{n}_p"] < config.accept_alpha / 2 and gains[n] > config.min_gain
+    out["accepted"] = any(out[f"{n}_p"] < config.accept_alpha / 2 and gains[n] > 0
                           for n in ("one_step", "outage"))
     return out
 

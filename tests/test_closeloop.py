@@ -84,25 +84,6 @@ def test_json_has_the_documented_layout():
     assert effect["freq_hz"] is None and effect["mse_after"] < effect["mse_before"]
 
 
-def test_a_significant_gain_below_min_gain_is_not_kept():
-    rec = make_scenario("undeclared_step", seed=0)
-    y = rec.columns[rec.target]
-    config = LoopConfig(rate=rec.rate, sensor="gyro", units=rec.truth["units"], min_gain=0.2)
-    res = close_loop(y, {}, config)
-    assert not res.steps
-    # the default keeps it (test_loop_names_the_effect_...): significant, but below 20 %
-    ((step,),) = [[r for r in res.rejected if r["kind"] == "step"]]
-    ev = step["evaluation"]
-    assert not ev["accepted"] and ev["outage_p"] < config.accept_alpha / 2
-    assert 0.005 < ev["outage_gain"] < 0.2
-
-
-@pytest.mark.parametrize("gain", [-0.1, 1.0, 2.0])
-def test_min_gain_must_be_a_fraction(gain):
-    with pytest.raises(InputError, match="min_gain"):
-        LoopConfig(rate=100.0, min_gain=gain)
-
-
 def test_too_short_a_record_is_refused():
     rec = make_scenario("clean", duration=60.0, seed=0)
     with pytest.raises(InputError, match="too short for the split"):
