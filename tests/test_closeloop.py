@@ -5,7 +5,7 @@ import pytest
 
 from data_synth import make_scenario
 from data_synth.true_effects import true_effects
-from fosmodel.closeloop import LoopConfig, close_loop, score_family
+from fosmodel.closeloop import LoopConfig, _compare, close_loop, score_family
 from fosmodel.effects import CandidateFamily
 from fosmodel.exceptions import InputError
 
@@ -82,6 +82,36 @@ def test_json_has_the_documented_layout():
         effect)
     assert effect["kind"] == "aux" and effect["channel"] == "accel_x" and effect["lag"] == 3
     assert effect["freq_hz"] is None and effect["mse_after"] < effect["mse_before"]
+
+
+class _LastPlus:
+    """Predicts the last sample plus ``step[n]``; its free runs hold the last sample."""
+
+    def __init__(self, step):
+        self.step = step
+
+    def predict(self, y):
+        return np.r_[np.nan, y[:-1]] + self.step[: len(y)]
+
+    def simulate(self, y_init, n_steps):
+        return np.full(n_steps, np.asarray(y_init)[-1])
+
+
+def test_a_change_that_helps_only_in_the_first_half_of_the_evaluation_is_not_kept():
+    rng = np.random.default_rng(0)
+    n, segment = 6000, slice(2000, 6000)
+    jump = rng.standard_normal(n)
+    y = np.cumsum(jump) + rng.standard_normal(n)
+    config = LoopConfig(rate=10.0)
+    base = _LastPlus(np.zeros(n))
+    share = np.where(np.arange(n) < 4000, 1.0, -0.2)  # knows the jumps, then errs the other way
+    fading = _compare(base, _LastPlus(share * jump), y, segment, config)
+    # significant over the whole segment, and lower errors there: the old rule kept it
+    assert fading["one_step_p"] < config.accept_alpha / 2 and fading["one_step_gain"] > 0.05
+    first, second = fading["one_step_gain_halves"]
+    assert first > 0 > second and not fading["accepted"]
+    steady = _compare(base, _LastPlus(0.4 * jump), y, segment, config)
+    assert min(steady["one_step_gain_halves"]) > 0 and steady["accepted"]
 
 
 def test_too_short_a_record_is_refused():
