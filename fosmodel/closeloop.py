@@ -310,9 +310,11 @@ def _compare(a: BoundModel, b: BoundModel, y, segment: slice, config: LoopConfig
     free-run errors.  With no effect, ``beta`` is centred
     on 0 (the candidate was fit on other samples).  ``b`` is kept if either test
     is significant at ``accept_alpha / 2`` (one-sided) and the same errors' mean
-    square is lower with ``b`` over the segment and over each of its halves:
-    an effect that helps only next to the fitting data (a trend fit there,
-    which then runs on) fades or turns in the later half.
+    square is lower with ``b`` over the segment and, on a segment of at least
+    ``2 * MIN_HALF_WINDOWS`` outage windows, over each of its halves: an
+    effect that helps only next to the fitting data (a trend fit there, which
+    then runs on) fades or turns in the later half.  On a shorter segment the
+    halves' errors are too few to tell that from noise.
     """
     stop = segment.stop
     pa, pb = a.predict(y[:stop])[segment], b.predict(y[:stop])[segment]
@@ -325,14 +327,15 @@ def _compare(a: BoundModel, b: BoundModel, y, segment: slice, config: LoopConfig
     fb = free_run_errors(b, y, starts, h)
     groups = {"one_step": list(zip(np.array_split(ea, 10), np.array_split(pb - pa, 10))),
               "outage": list(zip(fa, fa - fb))}
-    out, accepted = {}, False
+    judge_halves = len(starts) >= 2 * MIN_HALF_WINDOWS
+    out, accepted = {"halves_judged": judge_halves}, False
     for name, pairs in groups.items():
         beta, t, p = _encompassing(pairs)
         half = len(pairs) // 2
         gain, halves = _gain(pairs), [_gain(pairs[:half]), _gain(pairs[half:])]
         out.update({f"{name}_gain": gain, f"{name}_gain_halves": halves, f"{name}_beta": beta,
                     f"{name}_t": t, f"{name}_p": p})
-        accepted |= p < config.accept_alpha / 2 and min(gain, *halves) > 0
+        accepted |= p < config.accept_alpha / 2 and min([gain, *halves[: 2 * judge_halves]]) > 0
     out["accepted"] = accepted
     return out
 
@@ -364,6 +367,7 @@ def _encompassing(groups: list[tuple[np.ndarray, np.ndarray]]) -> tuple[float, f
 
 
 MAX_WINDOWS = 100  # most outage windows of the evaluation test
+MIN_HALF_WINDOWS = 20  # outage windows in each half of the evaluation segment to judge it
 STRONG_BIC = 6.0  # Kass and Raftery: a BIC difference of 6 or more is strong evidence
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from .closeloop import LoopResult
+from .closeloop import MIN_HALF_WINDOWS, LoopResult
 from .diagnose import Finding
 from .output import write_text
 from .report import save_figure, write_tables
@@ -155,8 +155,9 @@ def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
         f"Segments: {spans}. Starting model: FOS, lags 1-{cfg.max_lag}, CP 1. Each diagnostic "
         f"is a test at level {cfg.alpha:g}; an effect is kept only if it lowers the evaluation "
         f"segment's one-step or outage error beyond noise (forecast-encompassing t test at "
-        f"{cfg.accept_alpha:g}), over the segment and over each of its halves. The prediction "
-        "segment decides nothing: it gives the numbers below.", "",
+        f"{cfg.accept_alpha:g}), over the segment and, when each half holds at least "
+        f"{MIN_HALF_WINDOWS} outage windows, over each of its halves. The prediction segment "
+        "decides nothing: it gives the numbers below.", "",
         "## Before and after, prediction segment", "", markdown_table(effects, digits=4), "",
         "## Diagnostics of the first and the final model", "",
         markdown_table(diagnostics, digits=3), "",

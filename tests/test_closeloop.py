@@ -109,9 +109,13 @@ def test_a_change_that_helps_only_in_the_first_half_of_the_evaluation_is_not_kep
     # significant over the whole segment, and lower errors there: the old rule kept it
     assert fading["one_step_p"] < config.accept_alpha / 2 and fading["one_step_gain"] > 0.05
     first, second = fading["one_step_gain_halves"]
-    assert first > 0 > second and not fading["accepted"]
+    assert fading["halves_judged"] and first > 0 > second and not fading["accepted"]
     steady = _compare(base, _LastPlus(0.4 * jump), y, segment, config)
     assert min(steady["one_step_gain_halves"]) > 0 and steady["accepted"]
+    # 20 outage windows of 5 s: too few to judge halves; the whole segment decides
+    short = _compare(base, _LastPlus(share * jump), y, slice(3500, 4500), config)
+    assert not short["halves_judged"] and short["one_step_gain_halves"][1] < 0
+    assert short["accepted"]
 
 
 def test_too_short_a_record_is_refused():
