@@ -335,7 +335,8 @@ def _compare(a: BoundModel, b: BoundModel, y, segment: slice, config: LoopConfig
         gain, halves = _gain(pairs), [_gain(pairs[:half]), _gain(pairs[half:])]
         out.update({f"{name}_gain": gain, f"{name}_gain_halves": halves, f"{name}_beta": beta,
                     f"{name}_t": t, f"{name}_p": p})
-        accepted |= p < config.accept_alpha / 2 and min([gain, *halves[: 2 * judge_halves]]) > 0
+        judged = [gain, *halves] if judge_halves else [gain]
+        accepted |= p < config.accept_alpha / 2 and min(judged) > 0
     out["accepted"] = accepted
     return out
 

@@ -165,13 +165,23 @@ def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
     if result.rejected:
         lines += ["## Candidates that did not survive the evaluation segment", ""]
         for r in result.rejected:
-            ev = r["evaluation"]
-            lines.append(f"- {r['effect']}: one-step gain {ev['one_step_gain']:.3g} (p "
-                         f"{ev['one_step_p']:.2g}), outage gain {ev['outage_gain']:.3g} "
-                         f"(p {ev['outage_p']:.2g})")
+            lines.append(f"- {r['effect']}: {evaluation_text(r['evaluation'])}")
         lines.append("")
     if result.unexplained:
         lines += [f"Still firing at the end, with no effect that survives: "
                   f"{', '.join(result.unexplained)}.", ""]
     lines += ["![residual diagnostics before and after](residual.png)", ""]
     return "\n".join(lines)
+
+
+def evaluation_text(ev: dict) -> str:
+    """A candidate's evaluation in words: each test's gain, p-value and, when judged, its
+    gains on the two halves of the segment."""
+    parts = []
+    for name, label in (("one_step", "one-step"), ("outage", "outage")):
+        text = f"{label} gain {ev[f'{name}_gain']:.2g} (p {ev[f'{name}_p']:.2g}"
+        if ev.get("halves_judged"):
+            first, second = ev[f"{name}_gain_halves"]
+            text += f"; halves {first:.2g}, {second:.2g}"
+        parts.append(text + ")")
+    return ", ".join(parts)

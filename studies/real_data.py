@@ -31,7 +31,7 @@ from fosmodel.diagnose import least_squares_spectrum
 from fosmodel.effects import CandidateFamily, Effect
 from fosmodel.harness import StudyConfig, StudyResult, run_study
 from fosmodel.loader import Record, load_record
-from fosmodel.loop_report import write_loop_report
+from fosmodel.loop_report import evaluation_text, write_loop_report
 from fosmodel.report import paper_table, write_study
 from fosmodel.samples import load_mpu6050_static
 from fosmodel.summary import markdown_table
@@ -243,10 +243,8 @@ def named_effects(loops: dict, recs, mtig_keep: Record, temp: pd.DataFrame) -> l
 def _rejection(res: LoopResult, prefix: str) -> str:
     rej = [r for r in res.rejected if r["effect"].startswith(prefix)]
     if rej:
-        ev = rej[0]["evaluation"]
-        return (f"it was tried and rejected on the evaluation segment (one-step gain "
-                f"{ev['one_step_gain']:.2g}, p {ev['one_step_p']:.2g}; outage gain "
-                f"{ev['outage_gain']:.2g}, p {ev['outage_p']:.2g}).")
+        return ("it was tried and rejected on the evaluation segment: "
+                f"{evaluation_text(rej[0]['evaluation'])}.")
     return "no diagnostic pointed to it (none of its tests fired)."
 
 
