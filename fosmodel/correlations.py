@@ -138,14 +138,13 @@ class LagCorrelations:
         """
         if batch.new is not None:
             self._add_shapes(batch)
-        lmin, table = batch.lmin, batch.table
+        table, s = batch.table, batch.slot
+        lo = batch.lmin[table]
+        tabulated = self._core[s] + self._head[s, self._n0 - lo] - self._tail[s, lo]
         if table.all():
-            s = batch.slot
-            out = self._core[s] + self._head[s, self._n0 - lmin] - self._tail[s, lmin]
-            return out / self.n_samples
+            return tabulated / self.n_samples
         out = np.empty(len(ch))
-        s, lo = batch.slot, lmin[table]
-        out[table] = self._core[s] + self._head[s, self._n0 - lo] - self._tail[s, lo]
+        out[table] = tabulated
         direct = ~table
         if extra is None:
             out[direct] = self._direct_sums(ch[direct], lag[direct], None)

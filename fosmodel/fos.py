@@ -248,7 +248,7 @@ def _fos_kernel(
     active = np.ones(n_cand, dtype=bool)
     dependent = np.zeros(n_cand, dtype=bool)
     live_floor = floor.copy()  # floor, -inf once a candidate is selected or dependent
-    q_all = np.empty(n_cand)  # Q of the active candidates, -inf for the others
+    q_all = np.full(n_cand, -np.inf)  # Q of the active candidates, -inf for the others
     d_hist = np.empty((max(cap, 0), n_cand))  # D(c, r) for each selected r
     a_hist = np.empty((max(cap, 0), n_cand))  # alpha_cr = D(c, r) / D(r, r)
     support: list[int] = []
@@ -266,11 +266,10 @@ def _fos_kernel(
         if newly.any():
             dependent |= newly
             active &= ~newly
-            live_floor[newly] = -np.inf
+            live_floor[newly] = q_all[newly] = -np.inf
             if not active.any():
                 reason = "exhausted"
                 break
-        q_all[~active] = -np.inf
         np.divide(c_rem * c_rem, d_rem, out=q_all, where=active)
         j = int(np.argmax(q_all))
         q = float(q_all[j])
@@ -293,7 +292,7 @@ def _fos_kernel(
         if r:
             d_col -= a_hist[:r].T @ d_hist[:r, j]  # eq. 19
         d_jj = d_col[j]
-        active[j], live_floor[j] = False, -np.inf
+        active[j], live_floor[j], q_all[j] = False, -np.inf, -np.inf
         if not d_jj > floor[j]:  # fresher than d_rem[j]; guard rounding
             dependent[j] = True
             continue
