@@ -2,15 +2,17 @@
 
 A candidate is a product of *factors*.  A factor is a lagged channel value
 ``ch[n-k]`` (the modelled output is always the channel ``y``, lags 1..L; an
-exogenous input ``x`` has lags 0..K) or a user-given column evaluated at ``n``
-(a sinusoid, a trend, a step...).  The constant candidate has no factor.
+exogenous input ``x`` has lags 0..K), a local level of the output
+``level@<tau>s`` (the exponentially weighted mean of ``y[n-1], y[n-2], ...``,
+:mod:`fosmodel.levels`) or a user-given column evaluated at ``n`` (a sinusoid,
+a trend, a step...).  The constant candidate has no factor.
 
 Names are readable and parse back to the same term::
 
-    1    y[n-1]    temp[n-0]    y[n-1]*y[n-3]    y[n-2]^2    y[n-1]*temp[n-0]    sin@0.5Hz
+    1    y[n-1]    temp[n-0]    y[n-1]*y[n-3]    y[n-2]^2    level@20s    sin@0.5Hz
 
-Factors are ordered canonically: ``y`` first, other channels alphabetically,
-then by lag; a repeated factor is written as a power.
+Factors are ordered canonically: ``y`` first, then the levels, other channels
+alphabetically, then by lag; a repeated factor is written as a power.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from itertools import combinations_with_replacement
 import numpy as np
 
 from .exceptions import InputError
+from .levels import is_level, level_name, level_tau
 
 OUTPUT = "y"
 _CHANNEL_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -33,17 +36,17 @@ _LAGGED_RE = re.compile(r"^(?P<ch>[A-Za-z_][A-Za-z0-9_]*)\[n-(?P<lag>\d+)\]$")
 _POWER_RE = re.compile(r"^(?P<base>.+?)\^(?P<p>\d+)$")
 
 Factor = tuple[str, "int | None"]
-"""``(channel, lag)``; ``lag`` is None for a user-given column."""
+"""``(channel, lag)``; ``lag`` is None for a user-given column and 0 for a level."""
 
 
 def _factor_key(f: Factor) -> tuple:
     ch, lag = f
-    return (ch != OUTPUT, lag is None, ch, -1 if lag is None else lag)
+    return (ch != OUTPUT, not is_level(ch), lag is None, ch, -1 if lag is None else lag)
 
 
 def _factor_name(f: Factor) -> str:
     ch, lag = f
-    return ch if lag is None else f"{ch}[n-{lag}]"
+    return ch if lag is None or is_level(ch) else f"{ch}[n-{lag}]"
 
 
 @dataclass(frozen=True)
@@ -111,7 +114,9 @@ class Term:
                 if power < 1:
                     raise InputError(f"bad power in term {name!r}")
             lagged = _LAGGED_RE.match(token)
-            if lagged:
+            if level_tau(token) is not None:
+                factor = (token, 0)
+            elif lagged:
                 factor: Factor = (lagged.group("ch"), int(lagged.group("lag")))
             elif _COLUMN_RE.match(token) and "[" not in token:
                 factor = (token, None)
@@ -138,6 +143,10 @@ class CandidateSpec:
         They enter linearly, not in cross-products.
     constant : bool
         Include the constant candidate ``1``.
+    levels : sequence of float
+        Time constants in seconds of the local levels ``level@<tau>s`` offered
+        (rounded to the 4 significant digits of their names).  Like the lagged
+        outputs they enter linearly and in cross-products.
     """
 
     max_lag: int = 10
@@ -145,10 +154,12 @@ class CandidateSpec:
     exog_lags: Mapping[str, int] = field(default_factory=dict)
     columns: Sequence[str] = ()
     constant: bool = True
+    levels: Sequence[float] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "exog_lags", dict(self.exog_lags or {}))
         object.__setattr__(self, "columns", tuple(self.columns or ()))
+        object.__setattr__(self, "levels", _level_taus(self.levels))
         _check_int("max_lag", self.max_lag, 0)
         _check_int("degree", self.degree, 1)
         for ch, k in self.exog_lags.items():
@@ -163,27 +174,50 @@ class CandidateSpec:
                     f"candidate column name {name!r} must start with a letter or '_' and may not "
                     "contain spaces, '*', '^', '[' or ']'"
                 )
-            if name in self.exog_lags or name in (OUTPUT, "1"):
+            if name in self.exog_lags or name in (OUTPUT, "1") or is_level(name):
                 raise InputError(f"candidate column name {name!r} clashes with a channel")
         if len(set(self.columns)) != len(self.columns):
             raise InputError("candidate column names must be unique")
 
     @property
     def lag_window(self) -> int:
-        """N0: the first sample index at which every candidate is defined."""
-        return max([self.max_lag, *self.exog_lags.values()])
+        """N0: the first sample index at which every candidate is defined.
+
+        At least 1 with levels: ``level[0]`` is ``y[0]`` itself.
+        """
+        return max([self.max_lag, *self.exog_lags.values(), int(bool(self.levels))])
+
+    @property
+    def level_names(self) -> tuple[str, ...]:
+        """``level@<tau>s`` of each level offered."""
+        return tuple(level_name(t) for t in self.levels)
 
     @property
     def channels(self) -> tuple[str, ...]:
-        """Signals the candidates read: ``y``, then exogenous channels, then columns."""
-        return (OUTPUT, *self.exog_lags, *self.columns)
+        """Signals the candidates read: ``y``, its levels, exogenous channels, then columns."""
+        return (OUTPUT, *self.level_names, *self.exog_lags, *self.columns)
 
     def base_factors(self) -> list[Factor]:
-        """The degree-1 lagged factors, in canonical order."""
+        """The degree-1 lagged factors and levels, in canonical order."""
         out: list[Factor] = [(OUTPUT, lag) for lag in range(1, self.max_lag + 1)]
+        out.extend((name, 0) for name in self.level_names)
         for ch in sorted(self.exog_lags):
             out.extend((ch, lag) for lag in range(self.exog_lags[ch] + 1))
         return out
+
+
+def _level_taus(taus: object) -> tuple[float, ...]:
+    """Level time constants as their names round them; positive and distinct."""
+    out = []
+    for tau in taus or ():
+        if isinstance(tau, bool) or not isinstance(tau, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(tau) or tau <= 0:
+            raise InputError(f"a level time constant must be a positive number of seconds, "
+                             f"got {tau!r}")
+        out.append(level_tau(level_name(tau)))
+    if len(set(out)) != len(out):
+        raise InputError(f"level time constants repeat: {', '.join(map(level_name, out))}")
+    return tuple(sorted(out))
 
 
 def _check_int(what: str, value: object, lowest: int) -> None:
@@ -205,13 +239,13 @@ def count_candidates(spec: CandidateSpec) -> int:
 def generate_terms(spec: CandidateSpec) -> list[Term]:
     """All candidate terms of ``spec``: constant, products by degree, then user columns."""
     key = (spec.max_lag, spec.degree, tuple(sorted(spec.exog_lags.items())), spec.columns,
-           spec.constant)
+           spec.constant, spec.levels)
     return list(_generate(*key))
 
 
 @lru_cache(maxsize=32)
-def _generate(max_lag, degree, exog_lags, columns, constant) -> tuple[Term, ...]:
-    spec = CandidateSpec(max_lag, degree, dict(exog_lags), columns, constant)
+def _generate(max_lag, degree, exog_lags, columns, constant, levels) -> tuple[Term, ...]:
+    spec = CandidateSpec(max_lag, degree, dict(exog_lags), columns, constant, levels)
     base = spec.base_factors()
     terms = [Term(())] if constant else []
     for d in range(1, degree + 1):
@@ -230,6 +264,8 @@ def check_terms_fit_spec(terms: Iterable[Term], spec: CandidateSpec) -> None:
         for ch, lag in term.factors:
             if lag is None:
                 ok = ch in spec.columns
+            elif is_level(ch):
+                ok = ch in spec.level_names and lag == 0
             elif ch == OUTPUT:
                 ok = 1 <= lag <= spec.max_lag
             else:

@@ -20,12 +20,13 @@ converts readings in ``"g"`` and ``"mg"`` to m/s^2, while :data:`PAPER_GRAVITY`
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Iterable
 from typing import Protocol
 
 import numpy as np
 
-from .exceptions import InputError
+from .exceptions import InputError, UnstableModelWarning
 from .validation import as_signal, did_you_mean
 
 #: Standard gravity in m/s^2, used only to convert the units "g" and "mg".
@@ -40,7 +41,12 @@ _SI_SCALES: dict[str, dict[str, float]] = {
 
 
 class FreeRunModel(Protocol):
-    """What the outage metrics need of a model (FOSModel and the AR baselines)."""
+    """What the outage metrics need of a model (FOSModel and the AR baselines).
+
+    A model may also have ``free_runs(y, starts, n_steps)``, all the runs
+    ``simulate(y[:s], n_steps)`` at once (FOSModel's vectorised path); the
+    metrics use it when it is there.
+    """
 
     def simulate(self, y_init: np.ndarray, n_steps: int) -> np.ndarray:
         """Free-run continuation of ``y_init``, ``n_steps`` samples."""
@@ -185,7 +191,13 @@ def free_run_errors(
         raise InputError(f"an outage starting at sample {s.max()} needs {n_steps} samples, "
                          f"but y has {len(y)}")
     truth = y[s[:, None] + np.arange(n_steps)]
-    runs = [np.asarray(model.simulate(y[:k], n_steps), dtype=float) for k in s]
+    if hasattr(model, "free_runs"):
+        runs = model.free_runs(y, s, n_steps)
+        if np.isnan(runs).any():
+            warnings.warn(UnstableModelWarning(
+                "a free run diverged; its samples from the divergence on are NaN"), stacklevel=2)
+    else:
+        runs = [np.asarray(model.simulate(y[:k], n_steps), dtype=float) for k in s]
     return truth - np.reshape(runs, truth.shape)
 
 

@@ -5,8 +5,9 @@ The model (FOS paper, eqs. 14-15) is
     y[n] - mu_y = a_0 + sum_m a_m P_m[n] + e[n],
 
 where each ``P_m`` is a product of lagged, centred outputs ``y[n-l] - mu_y``
-(1 <= l <= L), lagged centred inputs ``x[n-k] - mu_x`` (0 <= k <= K) and
-user-given columns, chosen by :func:`fosmodel.fos._fos_kernel` among all such
+(1 <= l <= L), local levels of the centred output (:mod:`fosmodel.levels`),
+lagged centred inputs ``x[n-k] - mu_x`` (0 <= k <= K) and user-given columns,
+chosen by :func:`fosmodel.fos._fos_kernel` among all such
 candidates up to the cross-product degree.  Centring on the training means
 (``center=True``) makes the selected terms independent of the sensor bias:
 adding an offset to the record leaves the model unchanged but for ``mu``.
@@ -15,7 +16,6 @@ adding an offset to the record leaves the model unchanged but for ``mu``.
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -45,6 +45,8 @@ from .dynamics import (
 )
 from .exceptions import InputError
 from .fos import StopRule, _DataCorrelations, _fos_kernel, center
+from .freerun import run_many, run_one, split_expansion
+from .levels import check_level_rate, level_after, level_tau, with_levels
 from .summary import Summary
 from .validation import as_channels, as_signal
 
@@ -69,6 +71,13 @@ class FOSModel(BaseEstimator):
     columns : list of str, optional
         Names of user-given candidate columns (passed in ``exog``), e.g. a
         sinusoid or a trend; they enter linearly.
+    levels : list of float, optional
+        Time constants in seconds of local levels ``level@<tau>s`` of the output
+        to offer (the exponentially weighted mean of its past; see
+        :mod:`fosmodel.levels` and :func:`fosmodel.levels.level_grid`).  They
+        need ``rate``.
+    rate : float, optional
+        Sample rate in Hz (needed with ``levels``).
     max_terms : int, optional
         Most terms to select besides the constant.
     stop : str
@@ -124,6 +133,8 @@ class FOSModel(BaseEstimator):
         degree: int = 1,
         exog_lags: dict[str, int] | None = None,
         columns: list[str] | None = None,
+        levels: list[float] | None = None,
+        rate: float | None = None,
         max_terms: int | None = None,
         stop: str = "korenberg",
         tol: float | None = None,
@@ -136,6 +147,8 @@ class FOSModel(BaseEstimator):
         self.degree = degree
         self.exog_lags = exog_lags
         self.columns = columns
+        self.levels = levels
+        self.rate = rate
         self.max_terms = max_terms
         self.stop = stop
         self.tol = tol
@@ -147,7 +160,10 @@ class FOSModel(BaseEstimator):
     # -- fitting -------------------------------------------------------------------------
 
     def _spec(self) -> CandidateSpec:
-        return CandidateSpec(self.max_lag, self.degree, self.exog_lags or {}, self.columns or ())
+        spec = CandidateSpec(self.max_lag, self.degree, self.exog_lags or {}, self.columns or (),
+                             levels=self.levels or ())
+        check_level_rate(spec.levels, self.rate)
+        return spec
 
     def fit(
         self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
@@ -200,7 +216,7 @@ class FOSModel(BaseEstimator):
         _refuse_own_input(y_arr, channels)
         signals, offsets = self._centred({OUTPUT: y_arr, **channels}, None)
         terms = [t for t in generate_terms(spec) if not t.is_constant]
-        pieces = [{k: v[s] for k, v in signals.items()} for s in runs]
+        pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, spec) for s in runs]
         if self.correlations == "fast":
             with one_blas_thread():  # short products: threads cost more than they give
                 parts = [LagCorrelations(terms, piece, n0) for piece in pieces]
@@ -215,10 +231,7 @@ class FOSModel(BaseEstimator):
             res = _fos_kernel(corr, rule, intercept=True, dependence_tol=self.dependence_tol)
 
         self.spec_ = spec
-        self._terms = [terms[i] for i in res.support]
-        self.terms_ = [t.name for t in self._terms]
-        self.coef_ = res.coef
-        self.intercept_ = res.intercept
+        self._set_terms([terms[i] for i in res.support], res.coef, res.intercept)
         self.offsets_ = offsets
         self.mse_path_ = res.mse_path
         self.q_ = res.q
@@ -230,6 +243,18 @@ class FOSModel(BaseEstimator):
         self.n_dependent_ = res.n_dependent
         self.target_name_ = getattr(y, "name", None) or OUTPUT
         return self
+
+    def _with_levels(self, signals: dict[str, np.ndarray], spec: CandidateSpec):
+        """``signals`` (centred, one contiguous run) with the levels of its output added."""
+        return with_levels(signals, spec.level_names, self.rate, OUTPUT)
+
+    def _set_terms(self, terms: list[Term], coef: np.ndarray, intercept: float) -> None:
+        self._terms = terms
+        self.terms_ = [t.name for t in terms]
+        self.coef_ = np.asarray(coef, dtype=float)
+        self.intercept_ = float(intercept)
+        self._expansion = split_expansion(terms, self.coef_, self.intercept_, self.spec_.max_lag,
+                                          self.spec_.level_names, self.rate)
 
     def _centred(
         self, signals: dict[str, np.ndarray], offsets: Mapping[str, float] | None
@@ -280,7 +305,7 @@ class FOSModel(BaseEstimator):
         n0 = self.lag_window_
         out = np.full(n, np.nan)
         for run in _usable(segments, n, n0):
-            piece = {k: v[run] for k, v in signals.items()}
+            piece = self._with_levels({k: v[run] for k, v in signals.items()}, self.spec_)
             values = evaluate_sum(self._terms, self.coef_, piece, n0)
             out[run.start + n0 : run.stop] = values + self.intercept_ + self.offsets_[OUTPUT]
         if isinstance(y, pd.Series):
@@ -328,6 +353,8 @@ class FOSModel(BaseEstimator):
         ----------
         y_init : array-like
             True past, at least ``lag_window_`` samples; the run starts after its end.
+            The levels (if any) are the exponentially weighted means of all of it;
+            the lags read only its last ``lag_window_`` samples.
         n_steps : int
             Samples to simulate.
         exog : dict or DataFrame, optional
@@ -348,62 +375,58 @@ class FOSModel(BaseEstimator):
             (the samples from the divergence on are NaN).
         """
         self._check_fitted()
-        y0, drive = free_run_inputs(y_init, n_steps, noise, self.lag_window_)
-        warn_if_unstable(self.ar_coefficients(), "the fitted output dynamics")
         n0, spec = self.lag_window_, self.spec_
+        y0, drive = free_run_inputs(y_init, n_steps, noise, n0)
+        warn_if_unstable(self.ar_coefficients(), "the fitted output dynamics")
         channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y0) + int(n_steps))
-        cut = len(y0) - n0  # only the last N0 samples of the past reach the run
+        cut = len(y0) - n0  # only the last N0 samples of the past reach the lags
         recent = {OUTPUT: np.r_[y0[cut:], np.zeros(n_steps)],
                   **{k: v[cut:] for k, v in channels.items()}}
         signals, _ = self._centred(recent, self._offsets_for(channels))
-        ar, nonlinear, drive = self._split_terms(signals, n0, drive)
+        ex = self._expansion
+        drive = drive + ex.intercept + evaluate_sum(
+            [t for t, _ in ex.drive], [c for _, c in ex.drive], signals, n0)
         with np.errstate(over="ignore", invalid="ignore"):
-            if nonlinear:
-                out = self._run_nonlinear(signals[OUTPUT], n0, ar, nonlinear, drive)
+            if ex.nonlinear or len(ex.gains):
+                levels = np.array([level_after(y0 - self.offsets_[OUTPUT], level_tau(name),
+                                               self.rate) for name in spec.level_names])
+                rests = [_rest(t.rest, signals, n0) for t in ex.nonlinear]
+                out = run_one(ex, signals[OUTPUT][:n0], levels, drive, rests)
             else:
-                out = ar_free_run(ar, signals[OUTPUT][:n0], drive)
+                out = ar_free_run(ex.phi, signals[OUTPUT][:n0], drive)
         return cut_at_divergence(out) + self.offsets_[OUTPUT]
 
-    def _split_terms(self, signals, start, drive):
-        """Split the terms into AR weights, a drive (terms free of y) and nonlinear terms.
+    def free_runs(
+        self, y: object, starts: Sequence[int], n_steps: int,
+        exog: Mapping[str, object] | pd.DataFrame | None = None,
+    ) -> np.ndarray:
+        """Free runs of ``n_steps`` samples from the true past ``y[:s]``, each ``s`` in ``starts``.
 
-        A nonlinear term becomes ``(w, lags)``: its weight times its factors
-        other than y, over the simulated samples, and the lags of its y factors.
+        Row ``k`` equals ``simulate(y[:s_k], n_steps, exog cut to y[:s_k + n_steps])``
+        (to rounding), computed for all starts at once; NaN in a row from a
+        divergence on.  ``y`` (and ``exog``) must cover every run.
+
+        Returns
+        -------
+        ndarray of shape (len(starts), n_steps)
         """
-        ar = np.zeros(self.spec_.max_lag)
-        nonlinear = []
-        drive = drive + self.intercept_
-        for term, c in zip(self._terms, self.coef_):
-            y_lags = [lag for ch, lag in term.factors if ch == OUTPUT]
-            rest = Term(tuple(f for f in term.factors if f[0] != OUTPUT))
-            if not y_lags:
-                drive = drive + evaluate_sum([rest], [c], signals, start)
-            elif term.degree == 1:
-                ar[y_lags[0] - 1] = c
-            else:
-                nonlinear.append((evaluate_sum([rest], [c], signals, start), np.asarray(y_lags)))
-        return ar, nonlinear, drive
-
-    @staticmethod
-    def _run_nonlinear(y, start, ar, nonlinear, drive):
-        """The recursion sample by sample, in plain Python floats (scalar work)."""
-        out = y.tolist()
-        lags = [(int(k) + 1, float(ar[k])) for k in np.flatnonzero(ar)]
-        terms = [(w.tolist(), [int(k) for k in y_lags]) for w, y_lags in nonlinear]
-        drive = drive.tolist()
-        for step in range(len(drive)):
-            n = start + step
-            value = drive[step] + sum(c * out[n - k] for k, c in lags)
-            for w, y_lags in terms:
-                p = w[step]
-                for k in y_lags:
-                    p *= out[n - k]
-                value += p
-            if not math.isfinite(value):
-                out[n:] = [math.nan] * (len(out) - n)
-                break
-            out[n] = value
-        return np.asarray(out[start:])
+        self._check_fitted()
+        signals = self._with_levels(self._signals(y, exog), self.spec_)
+        n, n0 = len(signals[OUTPUT]), self.lag_window_
+        s = np.asarray(starts, dtype=np.int64).reshape(-1)
+        if s.size and (s.min() < n0 or s.max() + n_steps > n):
+            raise InputError(f"free runs of {n_steps} samples from starts {s.min()}..{s.max()} "
+                             f"need samples {n0}..{s.max() + n_steps - 1}; y has {n}")
+        ex = self._expansion
+        steps = s[:, None] + np.arange(n_steps)
+        drive = ex.intercept + evaluate_sum(
+            [t for t, _ in ex.drive], [c for _, c in ex.drive], signals, n0)[steps - n0]
+        levels = np.column_stack([signals[name][s] for name in self.spec_.level_names]) \
+            if len(ex.gains) else np.zeros((len(s), 0))
+        past = signals[OUTPUT][s[:, None] + np.arange(-n0, 0)]
+        rests = [None if t.rest is None else evaluate_sum([t.rest], [1.0], signals, n0)[steps - n0]
+                 for t in ex.nonlinear]
+        return run_many(ex, past, levels, drive, rests) + self.offsets_[OUTPUT]
 
     # -- reporting and persistence -------------------------------------------------------
 
@@ -428,6 +451,7 @@ class FOSModel(BaseEstimator):
             ("Candidates", f"{self.n_candidates_}"),
             ("Max lag L / CP", f"{spec.max_lag} / {spec.degree}"),
             ("Exogenous", ", ".join(f"{k}:0-{v}" for k, v in spec.exog_lags.items()) or "none"),
+            *([("Levels offered", ", ".join(spec.level_names))] if spec.levels else []),
             ("Terms selected", f"{len(self.terms_)}"),
             ("Stop rule",
              self.stop if self.max_terms is None else f"{self.stop}, max {self.max_terms}"),
@@ -443,6 +467,9 @@ class FOSModel(BaseEstimator):
             if self.center else "Terms are products of the raw signals.",
             "Q is the training MSE reduction of each term (FOS eq. 27), in selection order.",
         ]
+        if spec.levels:
+            notes.append("level@<tau>s is the exponentially weighted mean of the output's past "
+                         "(time constant tau); in a free run it follows the model's own output.")
         return Summary("Fast Orthogonal Search model", info, table, notes)
 
     def to_dict(self, meta: Mapping[str, object] | None = None) -> dict:
@@ -497,10 +524,7 @@ class FOSModel(BaseEstimator):
             if coef.shape != (len(terms),):
                 raise InputError("coefficient count does not match the term count")
             model.spec_ = spec
-            model._terms = terms
-            model.terms_ = [t.name for t in terms]
-            model.coef_ = coef
-            model.intercept_ = float(fitted["intercept"])
+            model._set_terms(terms, coef, float(fitted["intercept"]))
             model.offsets_ = {str(k): float(v) for k, v in fitted["offsets"].items()}
             model.mse_path_ = np.asarray(fitted["mse_path"], dtype=float)
             model.q_ = np.asarray(fitted["q"], dtype=float)
@@ -520,6 +544,11 @@ class FOSModel(BaseEstimator):
             raise InputError(f"corrupted model file: {type(exc).__name__}: {exc}") from None
         model.meta_ = dict(data.get("meta") or {})
         return model
+
+
+def _rest(term: Term | None, signals: Mapping[str, np.ndarray], start: int):
+    """A nonlinear term's input factors over the simulated samples (None: it has none)."""
+    return None if term is None else evaluate_sum([term], [1.0], signals, start)
 
 
 def _refuse_own_input(y: np.ndarray, channels: Mapping[str, np.ndarray]) -> None:
@@ -581,11 +610,15 @@ class BoundModel:
     def simulate(self, y_init: object, n_steps: int, noise: object | None = None) -> np.ndarray:
         """Free run after ``y_init`` (the record's first samples) for ``n_steps`` samples.
 
-        Only the last ``lag_window_`` samples of the past reach the run, so only
-        they (and the inputs from there on) are passed on.
+        Without levels only the last ``lag_window_`` samples of the past reach
+        the run, so only they (and the inputs from there on) are passed on.
         """
         start, n0 = len(y_init), self.lag_window_
-        cut = max(start - n0, 0)
+        cut = 0 if self.model.spec_.levels else max(start - n0, 0)
         inputs = ({k: v[cut : start + n_steps] for k, v in self.inputs.items()}
                   if self.inputs else None)
         return self.model.simulate(np.asarray(y_init)[cut:], n_steps, inputs, noise)
+
+    def free_runs(self, y: object, starts: Sequence[int], n_steps: int) -> np.ndarray:
+        """:meth:`FOSModel.free_runs` on the record's first ``len(y)`` samples."""
+        return self.model.free_runs(y, starts, n_steps, self._cut(len(y)))

@@ -10,6 +10,12 @@ with the state ``x[n] = [y[n] - mu, y[n-1] - mu, ..., y[n-p+1] - mu]`` (``p`` th
 output lag the model uses, at least 1; unused lags of a sparse model are zeros in the first
 row of ``Phi``), ``mu`` the training mean and ``Q`` the model's innovation variance.
 
+A model with local levels (:mod:`fosmodel.levels`) has one more state per level,
+``level@<tau>s[n+1] = (1 - a) level[n] + a (y[n] - mu)``: the level the next sample is
+predicted from, updated by the newest output.  Its rows of ``Phi``, ``B`` and ``G`` are
+``(1 - a)`` on itself plus ``a`` times the output's row, so the driving noise reaches the
+level through the output, as it does in the model.
+
 Exogenous inputs enter through ``B``: the state carries the output history only, and the
 caller supplies ``u[n]``, the *raw* (uncentred) values named by ``input_names``: ``"1"``
 (the constant; a FOS model's intercept ``a0`` and the centring offsets of its channels sit
@@ -25,7 +31,7 @@ and inputs, the transition ``f(x, u)`` and its analytic Jacobian.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.linalg import solve_discrete_lyapunov
@@ -33,6 +39,7 @@ from scipy.linalg import solve_discrete_lyapunov
 from .baselines import ARModel, GaussMarkovModel
 from .candidates import OUTPUT, Term
 from .exceptions import InputError
+from .levels import level_gain, level_tau, smooth_after
 from .model import FOSModel
 from .validation import as_channels, as_signal
 
@@ -49,6 +56,7 @@ class _ShapingFilter:
     mu: float
     state_names: tuple[str, ...]
     input_names: tuple[str, ...]
+    level_gains: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_states(self) -> int:
@@ -80,18 +88,26 @@ class _ShapingFilter:
         """The modelled output ``H x + mu`` of the state ``x``."""
         return float(self.H[0] @ self._state(x)) + self.mu
 
+    @property
+    def n_lags(self) -> int:
+        """States that hold past outputs (the others are levels)."""
+        return self.n_states - len(self.level_gains)
+
     def state_from(self, y_past: object) -> np.ndarray:
-        """The state at the last sample of ``y_past`` (its last ``n_states`` samples, centred).
+        """The state at the last sample of ``y_past``: its last ``n_lags`` samples, centred,
+        and the levels after it (the exponentially weighted means of all of it).
 
         Raises
         ------
         InputError
-            Fewer than ``n_states`` samples.
+            Fewer than ``n_lags`` samples.
         """
         arr = as_signal(y_past, "y_past")
-        if len(arr) < self.n_states:
-            raise InputError(f"y_past has {len(arr)} samples; the state needs {self.n_states}")
-        return arr[::-1][: self.n_states] - self.mu
+        p = self.n_lags
+        if len(arr) < max(p, 1):
+            raise InputError(f"y_past has {len(arr)} samples; the state needs {max(p, 1)}")
+        levels = [smooth_after(arr - self.mu, a) for a in self.level_gains]
+        return np.r_[arr[::-1][:p] - self.mu, levels]
 
     def input_matrix(self, exog: Mapping[str, object] | None, n_samples: int) -> np.ndarray:
         """Inputs ``u[n]`` for ``n = 0 .. n_samples-1`` from the channels of a record.
@@ -156,7 +172,7 @@ class _ShapingFilter:
         return {
             "G": self.G.tolist(), "H": self.H.tolist(), "Q": self.Q.tolist(),
             "mu": float(self.mu), "state_names": list(self.state_names),
-            "input_names": list(self.input_names),
+            "input_names": list(self.input_names), "level_gains": self.level_gains.tolist(),
         }
 
 
@@ -245,17 +261,20 @@ class NonlinearStateSpace(_ShapingFilter):
         """The noise-free next state."""
         x, z = self._z(x, u)
         value = sum(c * np.prod(z[list(idx)]) for c, idx in zip(self.coef, self.factors))
-        return np.r_[value, x[:-1]]
+        p, a = self.n_lags, self.level_gains
+        return np.r_[value, x[: p - 1], (1.0 - a) * x[p:] + a * value]
 
     def jacobian(self, x: object, u: object | None = None) -> np.ndarray:
-        """``df/dx`` at ``(x, u)``, shape (p, p): product rule on each term, then the shift."""
+        """``df/dx`` at ``(x, u)``: product rule on each term, then the shift and the levels."""
         _, z = self._z(x, u)
-        p = self.n_states
-        jac = np.eye(p, k=-1)
+        n, p = self.n_states, self.n_lags
+        jac = np.zeros((n, n))
+        jac[1:p, : p - 1] = np.eye(p - 1)
         for c, idx in zip(self.coef, self.factors):
             for k, i in enumerate(idx):
-                if i < p:
+                if i < n:
                     jac[0, i] += c * np.prod(z[list(idx[:k] + idx[k + 1:])])
+        _level_rows(jac, p, self.level_gains)
         return jac
 
     def step(self, x: object, u: object | None = None, w: float = 0.0) -> np.ndarray:
@@ -285,16 +304,29 @@ class _Expansion:
     intercept: float | None
     terms: tuple[tuple[float, Term], ...]
     offsets: Mapping[str, float]
+    levels: tuple[tuple[str, float], ...] = ()  # (name, gain a) of each level state
 
     @property
-    def n_states(self) -> int:
+    def n_lags(self) -> int:
         lags = [lag for _, t in self.terms for ch, lag in t.factors if ch == OUTPUT]
         return max(lags, default=1)
 
     @property
+    def n_states(self) -> int:
+        return self.n_lags + len(self.levels)
+
+    def state_index(self, factor: tuple[str, int | None]) -> int | None:
+        """The state a factor reads (None for an input)."""
+        ch, lag = factor
+        if ch == OUTPUT:
+            return lag - 1
+        names = [name for name, _ in self.levels]
+        return self.n_lags + names.index(ch) if ch in names else None
+
+    @property
     def inputs(self) -> list[tuple[str, int | None]]:
-        """The distinct non-output factors, in canonical order."""
-        found = {f for _, t in self.terms for f in t.factors if f[0] != OUTPUT}
+        """The distinct factors that are not states, in canonical order."""
+        found = {f for _, t in self.terms for f in t.factors if self.state_index(f) is None}
         return sorted(found, key=lambda f: (f[0], f[1] is None, f[1] or 0))
 
     @property
@@ -315,16 +347,35 @@ def _expansion(model: object) -> _Expansion:
             raise InputError("this FOSModel is not fitted yet; call fit() first")
         q = float(model.mse_path_[-1]) if len(model.mse_path_) else float(model.mse_null_)
         terms = tuple((float(c), Term.parse(n)) for n, c in zip(model.terms_, model.coef_))
+        levels = tuple((name, level_gain(level_tau(name), model.rate))
+                       for name in model.spec_.level_names
+                       if any(f[0] == name for _, t in terms for f in t.factors))
         return _Expansion(model.offsets_[OUTPUT], q, float(model.intercept_), terms,
-                          dict(model.offsets_))
+                          dict(model.offsets_), levels)
     raise InputError(f"cannot export a {type(model).__name__}: a state space is built from a "
                      "fitted ARModel, GaussMarkovModel or FOSModel")
 
 
-def _output_matrices(p: int, q: float) -> dict:
-    e1 = np.eye(p)[:, :1]
-    return {"G": e1, "H": e1.T.copy(), "Q": np.array([[q]]),
-            "state_names": tuple(f"y[n-{k}]" if k else "y[n]" for k in range(p))}
+def _output_matrices(ex: _Expansion) -> dict:
+    n, p = ex.n_states, ex.n_lags
+    e1 = np.eye(n)[:, :1]
+    gains = np.array([a for _, a in ex.levels])
+    g = e1.copy()
+    g[p:, 0] = gains
+    names = [f"y[n-{k}]" if k else "y[n]" for k in range(p)]
+    names += [f"{name}[n+1]" for name, _ in ex.levels]
+    return {"G": g, "H": e1.T.copy(), "Q": np.array([[ex.q]]), "state_names": tuple(names),
+            "level_gains": gains}
+
+
+def _level_rows(matrix: np.ndarray, p: int, gains: np.ndarray) -> None:
+    """Fill the level rows of a transition (or input) matrix whose first row is the output's:
+    ``(1 - a)`` on the level itself plus ``a`` times the output row."""
+    for j, a in enumerate(gains):
+        row = a * matrix[0]
+        if matrix.shape[0] == matrix.shape[1]:
+            row[p + j] += 1.0 - a
+        matrix[p + j] = row
 
 
 def to_state_space(model: ARModel | GaussMarkovModel | FOSModel) -> StateSpace:
@@ -352,20 +403,24 @@ def to_state_space(model: ARModel | GaussMarkovModel | FOSModel) -> StateSpace:
         raise InputError(f"the FOS model has nonlinear term(s) {', '.join(nonlinear)}, which "
                          "a linear state space cannot carry; use to_nonlinear_state_space() "
                          "for an extended Kalman filter")
-    p, inputs, names = ex.n_states, ex.inputs, ex.input_names
+    n, p, inputs, names = ex.n_states, ex.n_lags, ex.inputs, ex.input_names
     shift = len(names) - len(inputs)  # 1 with the constant input first
-    phi, b = np.eye(p, k=-1), np.zeros((p, len(names)))
+    phi, b = np.zeros((n, n)), np.zeros((n, len(names)))
+    phi[1:p, : p - 1] = np.eye(p - 1)
     if ex.intercept is not None:
         b[0, 0] = ex.intercept
     for c, term in ex.terms:
-        ch, lag = term.factors[0]
-        if ch == OUTPUT:
-            phi[0, lag - 1] += c
+        factor = term.factors[0]
+        state = ex.state_index(factor)
+        if state is not None:
+            phi[0, state] += c
         else:
-            b[0, shift + inputs.index((ch, lag))] += c
-            b[0, 0] -= c * ex.offsets[ch]
-    return StateSpace(Phi=phi, B=b, mu=float(ex.mu), input_names=names,
-                      **_output_matrices(p, ex.q))
+            b[0, shift + inputs.index(factor)] += c
+            b[0, 0] -= c * ex.offsets[factor[0]]
+    outputs = _output_matrices(ex)
+    _level_rows(phi, p, outputs["level_gains"])
+    _level_rows(b, p, outputs["level_gains"])
+    return StateSpace(Phi=phi, B=b, mu=float(ex.mu), input_names=names, **outputs)
 
 
 def to_nonlinear_state_space(
@@ -388,21 +443,21 @@ def to_nonlinear_state_space(
         Not a fitted model of these kinds.
     """
     ex = _expansion(model)
-    p, inputs, names = ex.n_states, ex.inputs, ex.input_names
+    n, inputs, names = ex.n_states, ex.inputs, ex.input_names
     shift = len(names) - len(inputs)
 
     def index(factor: tuple[str, int | None]) -> int:
-        ch, lag = factor
-        return lag - 1 if ch == OUTPUT else p + shift + inputs.index(factor)
+        state = ex.state_index(factor)
+        return n + shift + inputs.index(factor) if state is None else state
 
     terms = [(c, tuple(index(f) for f in t.factors), t.name) for c, t in ex.terms]
     if ex.intercept is not None:
-        terms.insert(0, (ex.intercept, (p,), CONSTANT))
+        terms.insert(0, (ex.intercept, (n,), CONSTANT))
     offsets = [0.0] * shift + [ex.offsets[ch] for ch, _ in inputs]
     return NonlinearStateSpace(
         coef=np.array([c for c, _, _ in terms]), factors=tuple(i for _, i, _ in terms),
-        term_names=tuple(n for _, _, n in terms), input_offsets=np.array(offsets),
-        mu=float(ex.mu), input_names=names, **_output_matrices(p, ex.q))
+        term_names=tuple(name for _, _, name in terms), input_offsets=np.array(offsets),
+        mu=float(ex.mu), input_names=names, **_output_matrices(ex))
 
 
 def position_velocity_error_model(error: StateSpace, dt: float) -> StateSpace:
