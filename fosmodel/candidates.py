@@ -147,6 +147,9 @@ class CandidateSpec:
         Time constants in seconds of the local levels ``level@<tau>s`` offered
         (rounded to the 4 significant digits of their names).  Like the lagged
         outputs they enter linearly and in cross-products.
+    product_lags : int, optional
+        Restrict the cross-products (degree 2 and more) to the output lags
+        ``y[n-1] .. y[n-P]``; by default every lagged factor and level enters them.
     """
 
     max_lag: int = 10
@@ -155,6 +158,7 @@ class CandidateSpec:
     columns: Sequence[str] = ()
     constant: bool = True
     levels: Sequence[float] = ()
+    product_lags: int | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "exog_lags", dict(self.exog_lags or {}))
@@ -162,6 +166,8 @@ class CandidateSpec:
         object.__setattr__(self, "levels", _level_taus(self.levels))
         _check_int("max_lag", self.max_lag, 0)
         _check_int("degree", self.degree, 1)
+        if self.product_lags is not None:
+            _check_int("product_lags", self.product_lags, 1)
         for ch, k in self.exog_lags.items():
             if not isinstance(ch, str) or not _CHANNEL_RE.match(ch) or ch == OUTPUT:
                 raise InputError(
@@ -205,6 +211,12 @@ class CandidateSpec:
             out.extend((ch, lag) for lag in range(self.exog_lags[ch] + 1))
         return out
 
+    def product_factors(self) -> list[Factor]:
+        """The factors that enter cross-products of degree 2 and more."""
+        if self.product_lags is None:
+            return self.base_factors()
+        return [(OUTPUT, lag) for lag in range(1, min(self.product_lags, self.max_lag) + 1)]
+
 
 def _level_taus(taus: object) -> tuple[float, ...]:
     """Level time constants as their names round them; positive and distinct."""
@@ -228,28 +240,31 @@ def _check_int(what: str, value: object, lowest: int) -> None:
 def count_candidates(spec: CandidateSpec) -> int:
     """Number of candidates :func:`generate_terms` would produce, without building them.
 
-    With B lagged factors and degree D there are ``sum_{d=1..D} C(B+d-1, d)``
-    products (multisets), plus the constant and the user columns.
+    With B lagged factors, P of them in cross-products and degree D there are
+    ``B + sum_{d=2..D} C(P+d-1, d)`` products (multisets), plus the constant and
+    the user columns.
     """
-    b = len(spec.base_factors())
-    products = sum(math.comb(b + d - 1, d) for d in range(1, spec.degree + 1))
+    b, p = len(spec.base_factors()), len(spec.product_factors())
+    products = b + sum(math.comb(p + d - 1, d) for d in range(2, spec.degree + 1))
     return int(spec.constant) + products + len(spec.columns)
 
 
 def generate_terms(spec: CandidateSpec) -> list[Term]:
     """All candidate terms of ``spec``: constant, products by degree, then user columns."""
     key = (spec.max_lag, spec.degree, tuple(sorted(spec.exog_lags.items())), spec.columns,
-           spec.constant, spec.levels)
+           spec.constant, spec.levels, spec.product_lags)
     return list(_generate(*key))
 
 
 @lru_cache(maxsize=32)
-def _generate(max_lag, degree, exog_lags, columns, constant, levels) -> tuple[Term, ...]:
-    spec = CandidateSpec(max_lag, degree, dict(exog_lags), columns, constant, levels)
-    base = spec.base_factors()
+def _generate(max_lag, degree, exog_lags, columns, constant, levels, product_lags
+              ) -> tuple[Term, ...]:
+    spec = CandidateSpec(max_lag, degree, dict(exog_lags), columns, constant, levels,
+                         product_lags)
     terms = [Term(())] if constant else []
-    for d in range(1, degree + 1):
-        terms.extend(Term(c) for c in combinations_with_replacement(base, d))
+    terms.extend(Term((f,)) for f in spec.base_factors())
+    for d in range(2, degree + 1):
+        terms.extend(Term(c) for c in combinations_with_replacement(spec.product_factors(), d))
     terms.extend(Term(((name, None),)) for name in columns)
     return tuple(terms)
 
@@ -305,25 +320,43 @@ def evaluate_sum(
     terms: Sequence[Term], weights: Sequence[float], signals: Mapping[str, np.ndarray],
     start: int,
 ) -> np.ndarray:
-    """``evaluate_terms(terms, signals, start) @ weights``, one term at a time.
+    """``evaluate_terms(terms, signals, start) @ weights``, without the term matrix.
 
-    It holds two arrays of ``N - start`` values, never the ``N x len(terms)``
+    It holds a few arrays of ``N - start`` values, never the ``N x len(terms)``
     matrix: a prediction over hours of samples costs memory for one signal.
+    The linear terms of one signal are one convolution (its weights by lag),
+    the others are multiplied out term by term.
     """
     n = len(next(iter(signals.values())))
     total = np.zeros(n - start)
-    value = np.empty(n - start)
+    kernels: dict[str, dict[int, float]] = {}
     for term, w in zip(terms, weights):
-        value.fill(w)
-        for ch, lag in term.factors:
-            value *= _window(term, signals, ch, lag, start, n)
-        total += value
+        if term.degree == 1:
+            ch, lag = term.factors[0]
+            _check_reach(term, lag or 0, start)
+            by_lag = kernels.setdefault(ch, {})
+            by_lag[lag or 0] = by_lag.get(lag or 0, 0.0) + float(w)
+        elif term.is_constant:
+            total += w
+        else:
+            value = np.full(n - start, float(w))
+            for ch, lag in term.factors:
+                value *= _window(term, signals, ch, lag, start, n)
+            total += value
+    for ch, by_lag in kernels.items() if n > start else ():
+        kernel = np.zeros(max(by_lag) + 1)
+        kernel[list(by_lag)] = list(by_lag.values())
+        total += np.convolve(signals[ch], kernel)[start:n]  # sum_l w_l x[t - l]
     return total
+
+
+def _check_reach(term: Term, lag: int, start: int) -> None:
+    if lag > start:
+        raise InputError(f"term {term.name!r} needs {lag} past samples, only {start} given")
 
 
 def _window(term: Term, signals: Mapping[str, np.ndarray], ch: str, lag, start: int, n: int):
     """``signals[ch][t - lag]`` for ``t = start .. n-1``."""
     lag = lag or 0
-    if lag > start:
-        raise InputError(f"term {term.name!r} needs {lag} past samples, only {start} given")
+    _check_reach(term, lag, start)
     return signals[ch][start - lag : n - lag]

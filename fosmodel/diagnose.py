@@ -32,7 +32,6 @@ import numpy as np
 from scipy import stats
 from scipy.ndimage import median_filter
 from scipy.signal import zoom_fft
-from statsmodels.tsa.stattools import acf
 
 from .fos import StopRule, _fos_kernel
 
@@ -82,6 +81,19 @@ def _bonferroni(p: float, count: int) -> float:
 # -- whiteness ------------------------------------------------------------------------------
 
 
+def autocorrelation(x: np.ndarray, nlags: int) -> np.ndarray:
+    """Sample autocorrelation at lags ``0 .. nlags`` (mean removed, sums over N), as
+    statsmodels' ``acf`` defines it, by one dot product per lag: for the few lags the
+    tests read this beats an FFT of a long record several times."""
+    xc = np.asarray(x, dtype=float) - np.mean(x)
+    n = len(xc)
+    c0 = float(xc @ xc)
+    if c0 == 0:
+        return np.r_[1.0, np.zeros(nlags)]
+    return np.array([1.0] + [float(xc[k:] @ xc[: n - k]) / c0 for k in range(1, nlags + 1)])
+
+
+
 def whiteness(residual: np.ndarray, lags: int = 20, alpha: float = ALPHA) -> Finding:
     """Ljung-Box test over ``lags`` lags, with the residual ACF against its 95 % band.
 
@@ -91,7 +103,7 @@ def whiteness(residual: np.ndarray, lags: int = 20, alpha: float = ALPHA) -> Fin
     """
     n = len(residual)
     nlags = int(min(100, n // 4))
-    rho = acf(residual, nlags=max(nlags, lags), fft=True)
+    rho = autocorrelation(residual, max(nlags, lags))
     k = np.arange(1, lags + 1)
     q = float(n * (n + 2) * np.sum(rho[k] ** 2 / (n - k)))
     return Finding("whiteness", q, float(stats.chi2.sf(q, lags)), alpha, {"lags": lags},
@@ -213,8 +225,26 @@ class _SinusoidCorrelations:
 # -- auxiliary channels ---------------------------------------------------------------------
 
 
+class AuxChannels:
+    """Other channels of a record, standardised (as they are and squared) with their ACF.
+
+    They do not change while a model's residual does: a loop that tests
+    several residuals against the same channels prepares them once.
+    """
+
+    def __init__(self, channels: Mapping[str, np.ndarray], acf_lags: int = 50) -> None:
+        self.acf_lags = acf_lags
+        self.forms: dict[str, dict[bool, tuple[np.ndarray, np.ndarray] | None]] = {}
+        for name, x in channels.items():
+            self.forms[name] = {}
+            for square in (False, True):
+                z = _standard((x - x.mean()) ** 2 if square else x)
+                self.forms[name][square] = None if z is None else (
+                    z, autocorrelation(z, acf_lags)[1:])
+
+
 def aux_correlation(
-    residual: np.ndarray, channels: Mapping[str, np.ndarray], max_lag: int = 10,
+    residual: np.ndarray, channels: Mapping[str, np.ndarray] | AuxChannels, max_lag: int = 10,
     alpha: float = ALPHA, acf_lags: int = 50,
 ) -> list[Finding]:
     """Cross-correlation of the residual with each channel and its square at lags 0..K.
@@ -223,22 +253,24 @@ def aux_correlation(
     Bartlett's ``(1 + 2 sum_j rho_rr(j) rho_xx(j)) / N``, so a slowly varying
     channel (a temperature) is not flagged because of a residual that is not
     quite white.  One finding per channel, Bonferroni over all channels, both
-    forms and all lags.
+    forms and all lags.  ``channels`` may be prepared (:class:`AuxChannels`).
     """
-    count = max(1, 2 * (max_lag + 1) * len(channels))
+    if not isinstance(channels, AuxChannels):
+        channels = AuxChannels(channels, acf_lags)
+    count = max(1, 2 * (max_lag + 1) * len(channels.forms))
     r = _standard(residual)
-    r_acf = acf(r, nlags=acf_lags, fft=True)[1:]
+    r_acf = None if r is None else autocorrelation(r, channels.acf_lags)[1:]
     out = []
-    for name, x in channels.items():
+    for name, forms in channels.forms.items():
         best = (0.0, 0, 0.0, False)  # z, lag, rho, square
         rhos = {}
-        for square in (False, True):
-            z = _standard((x - x.mean()) ** 2 if square else x)
-            if z is None or r is None:
+        for square, prepared in forms.items():
+            if prepared is None or r is None:
                 continue
+            z, z_acf = prepared
             rho = np.array([r[max_lag:] @ z[max_lag - k : len(z) - k] for k in range(max_lag + 1)])
             rho /= len(r) - max_lag
-            var = (1 + 2 * float(r_acf @ acf(z, nlags=acf_lags, fft=True)[1:])) / len(r)
+            var = (1 + 2 * float(r_acf @ z_acf)) / len(r)
             zs = np.abs(rho) / math.sqrt(max(var, 1.0 / len(r)))
             rhos[square] = rho
             k = int(np.argmax(zs))
@@ -248,7 +280,8 @@ def aux_correlation(
         out.append(Finding("aux", best[0], p, alpha,
                            {"channel": name, "lag": best[1], "rho": best[2], "square": best[3]},
                            {"lags": np.arange(max_lag + 1), "rho": rhos.get(False),
-                            "rho_square": rhos.get(True), "band": 1.96 / math.sqrt(len(r))}))
+                            "rho_square": rhos.get(True),
+                            "band": 1.96 / math.sqrt(len(residual))}))
     return out
 
 
@@ -265,20 +298,33 @@ def nonlinearity(residual: np.ndarray, lagged: np.ndarray, alpha: float = ALPHA)
 
     ``lagged`` holds ``y[n-1] .. y[n-L]`` row by row (aligned with ``residual``);
     the restricted model has the constant and the lags, the full one adds all
-    ``L (L+1) / 2`` products.
+    ``L (L+1) / 2`` products.  Both fits come from one Gram matrix of the
+    centred, standardised columns (the restricted one is its leading block).
     """
-    y = lagged - lagged.mean(axis=0)
-    iu = np.triu_indices(y.shape[1])
-    products = y[:, iu[0]] * y[:, iu[1]]
-    base = np.column_stack([np.ones(len(y)), y])
-    rss0 = _rss(base, residual)
-    rss1, coef = _rss(np.column_stack([base, products]), residual, coef=True)
-    q, dof = products.shape[1], len(y) - base.shape[1] - products.shape[1]
+    lags = lagged.shape[1]
+    iu = np.triu_indices(lags)
+    n_cols = lags + len(iu[0])
+    x = np.empty((len(lagged), n_cols), order="F")  # columns contiguous: built one at a time
+    for k in range(lags):
+        x[:, k] = lagged[:, k] - lagged[:, k].mean()
+    for k, (i, j) in enumerate(zip(*iu), start=lags):
+        np.multiply(x[:, i], x[:, j], out=x[:, k])
+        x[:, k] -= x[:, k].mean()
+    r = residual - residual.mean()
+    gram, g, total = x.T @ x, x.T @ r, float(r @ r)
+    diag = np.diag(gram)
+    scale = np.sqrt(np.where(diag > 0, diag, 1.0))  # standardise in the normal equations
+    gram, g = gram / np.outer(scale, scale), g / scale
+    coef = np.linalg.lstsq(gram, g, rcond=None)[0]
+    rss1 = total - float(g @ coef)
+    rss0 = total - float(g[:lags] @ np.linalg.lstsq(gram[:lags, :lags], g[:lags], rcond=None)[0])
+    products = x[:, lags:]
+    q, dof = products.shape[1], len(x) - 1 - lags - products.shape[1]
     f = ((rss0 - rss1) / q) / (rss1 / dof)
-    strongest = int(np.argmax(np.abs(coef[base.shape[1]:]) * products.std(axis=0)))
+    strongest = int(np.argmax(np.abs(coef[lags:])))  # on standardised products
     i, j = iu[0][strongest] + 1, iu[1][strongest] + 1
     return Finding("nonlinear", float(f), float(stats.f.sf(f, q, dof)), alpha,
-                   {"products": int(q), "max_lag": int(y.shape[1]),
+                   {"products": int(q), "max_lag": int(lags),
                     "strongest": f"y[n-{i}]^2" if i == j else f"y[n-{i}]*y[n-{j}]"},
                    {"product": products[:, strongest], "residual": residual})
 
@@ -326,19 +372,16 @@ def trend(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Findi
     t0 = float(time[0])
     r = residual - residual.mean()
     rss0 = float(r @ r)
-    poly = {"t": _centred((time - t0) / span), "t2": _centred(((time - t0) / span) ** 2)}
+    t, t2 = _centred((time - t0) / span), _centred(((time - t0) / span) ** 2)
+    base = {"t": (t, float(t @ r)), "t2": (t2, float(t2 @ r))}
     taus = np.geomspace(span / 50, span, 30)
-    fits = []
-    for form in TREND_FORMS:
-        for tau in (taus if "exponential" in form else [None]):
-            cols = [poly["t"]] if form in ("linear", "quadratic", "linear+exponential") else []
-            cols += [poly["t2"]] if form == "quadratic" else []
-            cols += [_centred(np.exp(-(time - t0) / tau))] if tau is not None else []
-            c = np.column_stack(cols)
-            gram, g = c.T @ c, c.T @ r
-            rss = rss0 - float(g @ np.linalg.lstsq(gram, g, rcond=None)[0])
-            k = c.shape[1] + (tau is not None)
-            fits.append((n * math.log(max(rss, 1e-300) / n) + k * math.log(n), form, tau, rss))
+    fits = [_trend_fit("linear", None, [base["t"]], rss0, n),
+            _trend_fit("quadratic", None, [base["t"], base["t2"]], rss0, n)]
+    for tau in taus:  # each exponential once: both of its forms need only its dot products
+        e = _centred(np.exp(-(time - t0) / tau))
+        fits.append(_trend_fit("exponential", tau, [(e, float(e @ r))], rss0, n))
+        fits.append(_trend_fit("linear+exponential", tau, [base["t"], (e, float(e @ r))],
+                               rss0, n))
     bic, form, tau, rss = min(fits, key=lambda f: f[0])
     best_tau = min((f for f in fits if f[2] is not None), key=lambda f: f[0])[2]
     cols = trend_columns(time, form, tau, t0)
@@ -352,6 +395,16 @@ def trend(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Findi
                     "range": float(curve.max() - curve.min()),
                     "bic_gain": float(n * math.log(rss0 / n) - bic)},
                    {"time": time, "fit": curve})
+
+
+def _trend_fit(form: str, tau: float | None, cols: list, rss0: float, n: int) -> tuple:
+    """``(BIC, form, tau, RSS)`` of the centred columns ``[(column, column . r), ...]``:
+    ``RSS = RSS0 - g' G^-1 g``."""
+    gram = np.array([[float(a @ b) for b, _ in cols] for a, _ in cols])
+    g = np.array([gr for _, gr in cols])
+    rss = rss0 - float(g @ np.linalg.lstsq(gram, g, rcond=None)[0])
+    k = len(cols) + (tau is not None)
+    return (n * math.log(max(rss, 1e-300) / n) + k * math.log(n), form, tau, rss)
 
 
 def _centred(x: np.ndarray) -> np.ndarray:

@@ -108,6 +108,31 @@ def smooth_after(y: np.ndarray, gain: float) -> float:
     return float((1.0 - gain) * smooth(y, gain)[-1] + gain * y[-1])
 
 
+def check_level_series(values: np.ndarray, y: np.ndarray, tau_s: float, rate: float,
+                       name: str) -> np.ndarray:
+    """``values`` as a float array if it is ``level_series(y, tau_s, rate)``, checked at its
+    start and at 16 points (to rounding): a cheap guard against the series of another
+    record or time constant.
+
+    Raises
+    ------
+    InputError
+        Another length, or a value off the recursion.
+    """
+    values = np.asarray(values, dtype=float)
+    if values.shape != y.shape:
+        raise InputError(f"{name} has {values.size} samples, the output has {y.size}")
+    a = level_gain(tau_s, rate)
+    k = np.unique(np.linspace(0, len(y) - 2, 16).astype(int)) if len(y) > 1 else np.zeros(0, int)
+    expected = np.r_[y[:1], (1.0 - a) * values[k] + a * y[k]]
+    got = np.r_[values[:1], values[k + 1]]
+    scale = 1e-9 * (np.abs(np.r_[expected, got]).max(initial=0.0) + 1e-300)
+    if not np.all(np.abs(got - expected) <= scale):
+        raise InputError(f"{name} given with the record is not the level of this output "
+                         f"(time constant {tau_s:g} s at {rate:g} Hz)")
+    return values
+
+
 def level_grid(n_samples: int, rate: float, tau_floor_s: float | None = None,
                count: int = 4) -> tuple[float, ...]:
     """Time constants to offer as level candidates, chosen from the record.
@@ -135,6 +160,20 @@ def level_grid(n_samples: int, rate: float, tau_floor_s: float | None = None,
     bottom = max(shortest, top / (30.0 / math.sqrt(3.0)))
     taus = np.geomspace(bottom, top, count) if top > bottom else np.array([top])
     return tuple(dict.fromkeys(level_tau(level_name(t)) for t in taus))
+
+
+def levels_for(y: np.ndarray, rate: float, count: int = 4) -> tuple[float, ...]:
+    """:func:`level_grid` for a record: its length and the floor of its overlapping Allan
+    deviation (allantools), at the shortest ``tau`` where it stops falling."""
+    import allantools  # only here: the grid of a record needs it, the levels do not
+
+    n = len(y)
+    m = np.unique(np.geomspace(1, max(1, n // 10), 30).astype(int))
+    taus, adev = allantools.oadev(np.asarray(y, dtype=float), rate=rate, data_type="freq",
+                                  taus=m / rate)[:2]
+    k = int(np.argmin(adev))
+    floor = float(taus[k]) if k < len(taus) - 1 else None  # still falling: no floor seen
+    return level_grid(n, rate, floor, count)
 
 
 def with_levels(signals: dict[str, np.ndarray], names: Sequence[str], rate: float,

@@ -15,6 +15,7 @@ adding an offset to the record leaves the model unchanged but for ``mu``.
 
 from __future__ import annotations
 
+import copy
 import logging
 from collections.abc import Mapping, Sequence
 
@@ -35,6 +36,7 @@ from .candidates import (
     generate_terms,
 )
 from .correlations import LagCorrelations, PooledCorrelations
+from .derived import channels_read, derive, is_derived
 from .dynamics import (
     ar_free_run,
     ar_roots,
@@ -46,7 +48,13 @@ from .dynamics import (
 from .exceptions import InputError
 from .fos import StopRule, _DataCorrelations, _fos_kernel, center
 from .freerun import run_many, run_one, split_expansion
-from .levels import check_level_rate, level_after, level_tau, with_levels
+from .levels import (
+    check_level_rate,
+    check_level_series,
+    level_after,
+    level_tau,
+    with_levels,
+)
 from .summary import Summary
 from .validation import as_channels, as_signal
 
@@ -70,14 +78,22 @@ class FOSModel(BaseEstimator):
         K per exogenous channel: ``{"temp": 5}`` offers ``temp[n-0] .. temp[n-5]``.
     columns : list of str, optional
         Names of user-given candidate columns (passed in ``exog``), e.g. a
-        sinusoid or a trend; they enter linearly.
+        sinusoid or a trend; they enter linearly.  Once fitted, a column whose
+        name says how to compute it (``cos@7.3Hz``, ``step@120s``, ... see
+        :mod:`fosmodel.derived`) need not be passed again: with ``rate`` set,
+        the model rebuilds it from the record.
     levels : list of float, optional
         Time constants in seconds of local levels ``level@<tau>s`` of the output
         to offer (the exponentially weighted mean of its past; see
         :mod:`fosmodel.levels` and :func:`fosmodel.levels.level_grid`).  They
-        need ``rate``.
+        need ``rate``.  They are computed from the output; ``exog`` may carry
+        them already (``level_series`` of the raw output, under their names,
+        spot-checked) to save the work on a record used many times.
     rate : float, optional
         Sample rate in Hz (needed with ``levels``).
+    product_lags : int, optional
+        Cross-products only of the output lags ``y[n-1] .. y[n-P]`` (by default of
+        every lagged factor and level).
     max_terms : int, optional
         Most terms to select besides the constant.
     stop : str
@@ -135,6 +151,7 @@ class FOSModel(BaseEstimator):
         columns: list[str] | None = None,
         levels: list[float] | None = None,
         rate: float | None = None,
+        product_lags: int | None = None,
         max_terms: int | None = None,
         stop: str = "korenberg",
         tol: float | None = None,
@@ -149,6 +166,7 @@ class FOSModel(BaseEstimator):
         self.columns = columns
         self.levels = levels
         self.rate = rate
+        self.product_lags = product_lags
         self.max_terms = max_terms
         self.stop = stop
         self.tol = tol
@@ -161,7 +179,7 @@ class FOSModel(BaseEstimator):
 
     def _spec(self) -> CandidateSpec:
         spec = CandidateSpec(self.max_lag, self.degree, self.exog_lags or {}, self.columns or (),
-                             levels=self.levels or ())
+                             levels=self.levels or (), product_lags=self.product_lags)
         check_level_rate(spec.levels, self.rate)
         return spec
 
@@ -215,6 +233,8 @@ class FOSModel(BaseEstimator):
         channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
         _refuse_own_input(y_arr, channels)
         signals, offsets = self._centred({OUTPUT: y_arr, **channels}, None)
+        if segments is None:
+            signals.update(self._given_levels(exog, y_arr, offsets[OUTPUT]))
         terms = [t for t in generate_terms(spec) if not t.is_constant]
         pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, spec) for s in runs]
         if self.correlations == "fast":
@@ -245,8 +265,20 @@ class FOSModel(BaseEstimator):
         return self
 
     def _with_levels(self, signals: dict[str, np.ndarray], spec: CandidateSpec):
-        """``signals`` (centred, one contiguous run) with the levels of its output added."""
-        return with_levels(signals, spec.level_names, self.rate, OUTPUT)
+        """``signals`` (centred, one contiguous run) with the levels of its output added
+        (those not there already)."""
+        missing = [name for name in spec.level_names if name not in signals]
+        return with_levels(signals, missing, self.rate, OUTPUT)
+
+    def _given_levels(self, exog: object, y: np.ndarray, mu: float,
+                      lo: int = 0) -> dict[str, np.ndarray]:
+        """Level series passed in ``exog`` (of the raw output), checked, centred by ``mu``,
+        from sample ``lo`` on."""
+        if exog is None:
+            return {}
+        names = [n for n in self._spec().level_names if n in set(map(str, exog.keys()))]
+        return {n: check_level_series(exog[n], y, level_tau(n), self.rate, n)[lo:] - mu
+                for n in names}
 
     def _set_terms(self, terms: list[Term], coef: np.ndarray, intercept: float) -> None:
         self._terms = terms
@@ -274,40 +306,98 @@ class FOSModel(BaseEstimator):
         if not hasattr(self, "terms_"):
             raise InputError("this FOSModel is not fitted yet; call fit() first")
 
-    def _signals(self, y: object, exog: object, length: int | None = None) -> dict[str, np.ndarray]:
+    def _signals(self, y: object, exog: object, levels: bool = True) -> dict[str, np.ndarray]:
+        """Centred output and inputs, with the level series given in ``exog`` if ``levels``."""
         y_arr = as_signal(y, "y")
-        n = len(y_arr) if length is None else length
-        spec = self.spec_
-        channels = as_channels(exog, [*spec.exog_lags, *spec.columns], n)
+        channels = self._inputs(exog, len(y_arr))
         signals, _ = self._centred({OUTPUT: y_arr, **channels}, self._offsets_for(channels))
+        if levels and self.spec_.levels:
+            signals.update(self._given_levels(exog, y_arr, self.offsets_[OUTPUT]))
         return signals
+
+    def _inputs(self, exog: object, n: int, lo: int = 0) -> dict[str, np.ndarray]:
+        """The channels and columns of a fitted model over samples ``lo .. n-1``: given in
+        ``exog`` (``n`` long), or rebuilt from their names (:mod:`fosmodel.derived`)."""
+        spec = self.spec_
+        names = [*spec.exog_lags, *spec.columns]
+        given = set(map(str, exog.keys())) if exog is not None else set()
+        rebuilt = [c for c in names if c not in given and is_derived(c)]
+        if rebuilt and self.rate is None:
+            raise InputError(f"{rebuilt[0]!r} can be rebuilt only with the model's sample rate "
+                             "(rate=...); pass its values instead")
+        read = [c for c in names if c not in rebuilt]
+        channels = as_channels(_cut(exog, read, n, lo), read, n - lo)
+        if rebuilt:
+            source = as_channels(exog, channels_read(rebuilt), n)
+            for name in rebuilt:
+                channels[name] = derive(name, n, self.rate, source, self.offsets_)[lo:]
+        return channels
+
+    def _signals_from(self, y: object, exog: object, lo: int) -> dict[str, np.ndarray]:
+        """Centred output, inputs and levels over samples ``lo ..`` of the record ``y`` (the
+        levels from its whole past: given in ``exog``, or computed)."""
+        y_arr = as_signal(y, "y")
+        n = len(y_arr)
+        channels = self._inputs(exog, n, lo)
+        signals, _ = self._centred({OUTPUT: y_arr[lo:], **channels},
+                                   self._offsets_for(channels))
+        if self.spec_.levels:
+            mu = self.offsets_[OUTPUT]
+            given = self._given_levels(exog, y_arr, mu, lo)
+            missing = [name for name in self.spec_.level_names if name not in given]
+            if missing:
+                computed = with_levels({OUTPUT: y_arr - mu}, missing, self.rate, OUTPUT)
+                given.update({name: computed[name][lo:] for name in missing})
+            signals.update(given)
+        return signals
+
+    def input_columns(self) -> list[str]:
+        """The record columns this fitted model reads besides its output (inputs it cannot
+        rebuild, and the channels those it rebuilds come from)."""
+        self._check_fitted()
+        names = [*self.spec_.exog_lags, *self.spec_.columns]
+        rebuilt = [c for c in names if is_derived(c)] if self.rate is not None else []
+        read = [c for c in names if c not in rebuilt]
+        return read + [c for c in channels_read(rebuilt) if c not in read]
 
     def _offsets_for(self, channels: Mapping[str, object]) -> dict[str, float]:
         return {OUTPUT: self.offsets_[OUTPUT], **{k: self.offsets_[k] for k in channels}}
 
     def predict(
         self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
-        segments: Sequence[slice] | None = None,
+        segments: Sequence[slice] | None = None, *, start: int = 0,
     ):
         """One-step-ahead prediction from the true past, aligned with ``y``.
 
         Sample ``n`` is predicted from ``y[n-1], y[n-2], ...`` and the channels
         up to ``n``; the first ``lag_window_`` samples (of each segment, if
-        ``segments`` are given) have no prediction (NaN).
+        ``segments`` are given) have no prediction (NaN).  With ``start``, only
+        the samples from ``start`` on are predicted (the others are NaN): the
+        work is that of the samples from ``start - lag_window_`` on, and the
+        levels' past.
 
         Returns
         -------
         ndarray, or Series with the index of ``y`` if ``y`` is a Series
         """
         self._check_fitted()
-        signals = self._signals(y, exog)
-        n = len(signals[OUTPUT])
         n0 = self.lag_window_
+        if segments is not None:
+            if start:
+                raise InputError("predict takes segments or a start, not both")
+            signals = self._signals(y, exog, levels=False)
+            runs, lo = _usable(segments, len(signals[OUTPUT]), n0), 0
+        else:
+            lo = max(int(start) - n0, 0)
+            signals = self._signals_from(y, exog, lo)
+            runs = _usable(None, len(signals[OUTPUT]), n0)
+        n = lo + len(signals[OUTPUT])
         out = np.full(n, np.nan)
-        for run in _usable(segments, n, n0):
+        for run in runs:
             piece = self._with_levels({k: v[run] for k, v in signals.items()}, self.spec_)
             values = evaluate_sum(self._terms, self.coef_, piece, n0)
-            out[run.start + n0 : run.stop] = values + self.intercept_ + self.offsets_[OUTPUT]
+            out[lo + run.start + n0 : lo + run.stop] = (values + self.intercept_
+                                                        + self.offsets_[OUTPUT])
         if isinstance(y, pd.Series):
             return pd.Series(out, index=y.index, name="prediction")
         return out
@@ -316,6 +406,43 @@ class FOSModel(BaseEstimator):
         """``y`` minus its one-step prediction (NaN over the lag window)."""
         pred = self.predict(y, exog)
         return (y - pred) if isinstance(pred, pd.Series) else as_signal(y, "y") - pred
+
+    def refit_weights(
+        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        segments: Sequence[slice] | None = None,
+    ) -> FOSModel:
+        """A copy with the selected terms' weights fitted anew on ``y`` (least squares).
+
+        The terms, the candidate set and the centring offsets stay; terms that
+        are numerically dependent on ``y`` (a step after its end, say) are
+        dropped.  The residual loop uses it to ask how a model chosen on one
+        stretch does when its weights come from an earlier one.
+
+        Returns
+        -------
+        FOSModel
+        """
+        self._check_fitted()
+        y_arr = as_signal(y, "y")
+        n0 = self.lag_window_
+        runs = _usable(segments, len(y_arr), n0)
+        if sum(s.stop - s.start - n0 for s in runs) < len(self._terms) + 2:
+            raise InputError(f"record too short to refit {len(self._terms)} term(s): "
+                             f"{len(y_arr)} samples")
+        signals = self._signals(y_arr, exog, levels=segments is None)
+        pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, self.spec_)
+                  for s in runs]
+        with one_blas_thread():
+            parts = [LagCorrelations(self._terms, piece, n0) for piece in pieces]
+            corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
+            res = _fos_kernel(corr, StopRule("max_terms", max_terms=len(self._terms)),
+                              intercept=True, dependence_tol=self.dependence_tol)
+        new = copy.copy(self)
+        new._set_terms([self._terms[i] for i in res.support], res.coef, res.intercept)
+        new.mse_path_, new.q_, new.mse_null_ = res.mse_path, res.q, res.mse_null
+        new.n_samples_, new.stop_reason_ = res.n_samples, "refit"
+        new.n_dependent_ = res.n_dependent
+        return new
 
     def ar_coefficients(self) -> np.ndarray:
         """Weights of the pure output lags ``y[n-l]``, l = 1..L (zeros where not selected)."""
@@ -375,10 +502,10 @@ class FOSModel(BaseEstimator):
             (the samples from the divergence on are NaN).
         """
         self._check_fitted()
-        n0, spec = self.lag_window_, self.spec_
+        n0 = self.lag_window_
         y0, drive = free_run_inputs(y_init, n_steps, noise, n0)
         warn_if_unstable(self.ar_coefficients(), "the fitted output dynamics")
-        channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y0) + int(n_steps))
+        channels = self._inputs(exog, len(y0) + int(n_steps))
         cut = len(y0) - n0  # only the last N0 samples of the past reach the lags
         recent = {OUTPUT: np.r_[y0[cut:], np.zeros(n_steps)],
                   **{k: v[cut:] for k, v in channels.items()}}
@@ -388,13 +515,28 @@ class FOSModel(BaseEstimator):
             [t for t, _ in ex.drive], [c for _, c in ex.drive], signals, n0)
         with np.errstate(over="ignore", invalid="ignore"):
             if ex.nonlinear or len(ex.gains):
-                levels = np.array([level_after(y0 - self.offsets_[OUTPUT], level_tau(name),
-                                               self.rate) for name in spec.level_names])
+                levels = self._levels_after(y0, exog)
                 rests = [_rest(t.rest, signals, n0) for t in ex.nonlinear]
                 out = run_one(ex, signals[OUTPUT][:n0], levels, drive, rests)
             else:
                 out = ar_free_run(ex.phi, signals[OUTPUT][:n0], drive)
         return cut_at_divergence(out) + self.offsets_[OUTPUT]
+
+    def _levels_after(self, y0: np.ndarray, exog: object) -> np.ndarray:
+        """The centred levels at the first sample after ``y0`` (from series given in ``exog``
+        over the past and the run, or computed from ``y0``)."""
+        mu, out = self.offsets_[OUTPUT], []
+        given = set(map(str, exog.keys())) if exog is not None else set()
+        for name in self.spec_.level_names:
+            tau = level_tau(name)
+            if name in given:
+                past = check_level_series(np.asarray(exog[name], dtype=float)[: len(y0)], y0,
+                                          tau, self.rate, name)
+                a = 1.0 / (tau * self.rate)
+                out.append((1.0 - a) * past[-1] + a * y0[-1] - mu)
+            else:
+                out.append(level_after(y0 - mu, tau, self.rate))
+        return np.array(out)
 
     def free_runs(
         self, y: object, starts: Sequence[int], n_steps: int,
@@ -411,12 +553,16 @@ class FOSModel(BaseEstimator):
         ndarray of shape (len(starts), n_steps)
         """
         self._check_fitted()
-        signals = self._with_levels(self._signals(y, exog), self.spec_)
-        n, n0 = len(signals[OUTPUT]), self.lag_window_
+        n, n0 = len(y), self.lag_window_
         s = np.asarray(starts, dtype=np.int64).reshape(-1)
-        if s.size and (s.min() < n0 or s.max() + n_steps > n):
+        if not s.size:
+            return np.empty((0, n_steps))
+        if s.min() < n0 or s.max() + n_steps > n:
             raise InputError(f"free runs of {n_steps} samples from starts {s.min()}..{s.max()} "
                              f"need samples {n0}..{s.max() + n_steps - 1}; y has {n}")
+        lo = int(s.min()) - n0  # nothing before reaches a run (the levels come with the signals)
+        signals = self._signals_from(y, exog, lo)
+        s = s - lo
         ex = self._expansion
         steps = s[:, None] + np.arange(n_steps)
         drive = ex.intercept + evaluate_sum(
@@ -546,6 +692,20 @@ class FOSModel(BaseEstimator):
         return model
 
 
+def _cut(exog: object, names: Sequence[str], n: int, lo: int) -> dict[str, object] | None:
+    """``exog``'s channels ``names`` from sample ``lo`` on (their lengths checked against n)."""
+    if exog is None or not names:
+        return exog
+    out = {}
+    for name in names:
+        if name in exog:
+            values = np.asarray(exog[name])
+            if values.ndim != 1 or len(values) != n:
+                raise InputError(f"channel {name!r} has {values.size} samples, the output has {n}")
+            out[name] = values[lo:]
+    return out or exog
+
+
 def _rest(term: Term | None, signals: Mapping[str, np.ndarray], start: int):
     """A nonlinear term's input factors over the simulated samples (None: it has none)."""
     return None if term is None else evaluate_sum([term], [1.0], signals, start)
@@ -603,9 +763,10 @@ class BoundModel:
     def _cut(self, n: int) -> dict[str, np.ndarray] | None:
         return {k: v[:n] for k, v in self.inputs.items()} if self.inputs else None
 
-    def predict(self, y: object) -> np.ndarray:
-        """One-step prediction of ``y``, the first ``len(y)`` samples of the record."""
-        return self.model.predict(y, self._cut(len(y)))
+    def predict(self, y: object, *, start: int = 0) -> np.ndarray:
+        """One-step prediction of ``y``, the first ``len(y)`` samples of the record (from
+        sample ``start`` on; see :meth:`FOSModel.predict`)."""
+        return self.model.predict(y, self._cut(len(y)), start=start)
 
     def simulate(self, y_init: object, n_steps: int, noise: object | None = None) -> np.ndarray:
         """Free run after ``y_init`` (the record's first samples) for ``n_steps`` samples.

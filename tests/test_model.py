@@ -381,3 +381,37 @@ def test_the_modelled_signal_cannot_be_its_own_input():
     y = np.random.default_rng(3).standard_normal(500)
     with pytest.raises(InputError, match="'gx' is the modelled signal itself"):
         FOSModel(max_lag=2, exog_lags={"gx": 1}).fit(y, {"gx": y.copy()})
+
+
+def test_refit_weights_keeps_the_terms_and_fits_the_weights_on_other_data():
+    rng = np.random.default_rng(8)
+    y = lfilter([1.0], [1.0, -1.2, 0.5], rng.standard_normal(6000))
+    model = FOSModel(max_lag=4).fit(y[:3000])
+    refit = model.refit_weights(y[3000:])
+    assert set(refit.terms_) == set(model.terms_) and refit.offsets_ == model.offsets_
+    yc = y[3000:] - model.offsets_["y"]
+    lags = [int(t[4:-1]) for t in refit.terms_]
+    x = np.column_stack([np.ones(3000 - 4)] + [yc[4 - k : 3000 - k] for k in lags])
+    coef = np.linalg.lstsq(x, yc[4:], rcond=None)[0]
+    np.testing.assert_allclose([refit.intercept_, *refit.coef_], coef, rtol=1e-8, atol=1e-12)
+    assert model.coef_.tolist() != refit.coef_.tolist()
+
+
+def test_predict_from_a_start_equals_the_full_prediction_there():
+    rng = np.random.default_rng(9)
+    y = lfilter([1.0], [1.0, -0.7], rng.standard_normal(3000)) + np.cumsum(
+        rng.standard_normal(3000)) * 0.02
+    model = FOSModel(max_lag=3, levels=[0.5, 4.0], rate=50.0).fit(y)
+    full, part = model.predict(y), model.predict(y, start=2000)
+    assert np.isnan(part[:2000]).all()
+    np.testing.assert_allclose(part[2000:], full[2000:], rtol=0, atol=1e-12)
+
+
+def test_product_lags_restrict_the_cross_products():
+    rng = np.random.default_rng(10)
+    y = lfilter([1.0], [1.0, -0.5], rng.standard_normal(4000))
+    model = FOSModel(max_lag=6, degree=2, product_lags=2, max_terms=30, stop="max_terms").fit(y)
+    assert model.n_candidates_ == 1 + 6 + 3  # constant, six lags, and y1^2, y1*y2, y2^2
+    for term in model.terms_:
+        if "*" in term or "^" in term:
+            assert set(term.replace("^2", "").split("*")) <= {"y[n-1]", "y[n-2]"}
