@@ -27,6 +27,7 @@ from . import __version__
 from .candidates import count_candidates
 from .exceptions import InputError
 from .fos import STOP_RULES
+from .levels import levels_for
 from .loader import OUTLIER_K, OUTLIER_MODES, Record, load_record, parse_scales
 from .model import FOSModel
 from .output import atomic_write, write_text
@@ -62,6 +63,20 @@ def _positive_int(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
     return value
+
+
+def _levels_arg(text: str) -> list[float] | str:
+    """``auto`` or comma-separated positive time constants in seconds."""
+    if text == "auto":
+        return text
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(np.isfinite(v) and v > 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected 'auto' or time constants in seconds like "
+                                         f"5,20, got {text!r}")
+    return values
 
 
 def _int_list(text: str) -> list[int]:
@@ -153,7 +168,13 @@ def _cmd_fit(args: argparse.Namespace) -> int:
                          "is in --max-lag)")
     rec = _load(args, columns=[args.column, *exog_lags])
     y = rec.column(args.column)
+    levels = args.levels
+    if levels == "auto":
+        levels = list(levels_for(y, rec.require_rate()))
+        print("levels offered (below the Allan floor): "
+              + ", ".join(f"{t:g} s" for t in levels))
     model = FOSModel(max_lag=args.max_lag, degree=args.degree, exog_lags=exog_lags,
+                     levels=levels, rate=rec.require_rate() if levels else None,
                      max_terms=args.max_terms, stop=args.stop, tol=args.tol,
                      max_candidates=args.max_candidates)
     spec = model._spec()
@@ -211,7 +232,7 @@ def _cmd_predict(args: argparse.Namespace) -> int:
     column = args.column or model.meta_.get("column")
     if not column:
         raise InputError("the model does not say which column it models; pass --column")
-    inputs = [*model.spec_.exog_lags, *model.spec_.columns]
+    inputs = model.input_columns()
     rec = _load(args, columns=[column, *inputs])
     y = rec.column(column)
     channels = {name: rec.column(name) for name in inputs}
@@ -431,6 +452,7 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
     from .loop_report import effects_table, write_loop_report
 
     json_path = _out_path(args.json) if args.json else None
+    model_path = _out_path(args.model) if args.model else None
     out = _out_dir(args.out)
     if args.aux is not None and args.column in args.aux:
         raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
@@ -442,8 +464,16 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
     channels = {name: rec.column(name) for name in aux}
     config = LoopConfig(rate=rec.require_rate(), sensor=args.sensor, units=args.units,
                         max_lag=args.max_lag, train=args.split[0], evaluate=args.split[1])
-    result = close_loop(y, channels, config)
+    result = close_loop(y, channels, config,
+                        progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,
+                                                    flush=True))
     write_loop_report(result, out, args.title or f"{args.column} of {Path(args.file).name}")
+    if model_path:
+        meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
+                "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment",
+                "effects": [step.effect.describe() for step in result.steps]}
+        write_text(model_path, json.dumps(result.final_model.model.to_dict(meta), indent=2)
+                   + "\n")
     print(effects_table(result).drop(columns=["Evidence"]).to_string(
         index=False, float_format=lambda v: f"{v:.4g}"))
     if result.unexplained:
@@ -451,7 +481,8 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
     if json_path:
         write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
     print(f"residual loop report written to {out.resolve()}/"
-          + (f" and {json_path}" if json_path else ""))
+          + (f" and {json_path}" if json_path else "")
+          + (f"; final model written to {model_path}" if model_path else ""))
     return 0
 
 
@@ -516,6 +547,9 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--max-terms", type=int, help="most terms besides the constant")
     fit.add_argument("--stop", choices=STOP_RULES, default="korenberg", help="stopping rule")
     fit.add_argument("--tol", type=float, help="fraction for --stop variance / mean_square")
+    fit.add_argument("--levels", type=_levels_arg, metavar="auto|T1,T2,...",
+                     help="local levels of the output to offer: their time constants in "
+                          "seconds, or 'auto' for a grid below the record's Allan floor")
     fit.add_argument("--max-candidates", type=_positive_int, default=100_000,
                      help="refuse a candidate set larger than this (default 100000)")
     fit.add_argument("--out", required=True, help="model file to write (JSON)")
@@ -582,6 +616,8 @@ def build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--title", help="title of the report")
     loop.add_argument("--out", required=True, help="output directory (created)")
     loop.add_argument("--json", help="also write the before/after metrics and effects as JSON")
+    loop.add_argument("--model", help="also write the final model as JSON (as 'fosmodel fit' "
+                                      "does), for 'fosmodel predict' and a filter")
     loop.set_defaults(func=_cmd_close_loop)
 
     allan = sub.add_parser("allan", help="Allan deviation with confidence intervals and the "

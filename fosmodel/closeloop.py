@@ -4,32 +4,36 @@ The record is split in time into a fitting segment, an evaluation segment and
 a prediction segment (by default 50 / 20 / 30 %).  Starting from a linear FOS
 model of the output's own lags:
 
-1. the residual over the fitting and evaluation segments goes through every
-   test of :mod:`fosmodel.diagnose`;
-2. each fired test gives a candidate effect (:func:`fosmodel.effects.effects_from`),
-   whose candidates are added to the FOS candidate set and the model refit on
-   the fitting segment;
-3. a candidate is kept only if it beats the current model on the evaluation
-   segment by more than noise would (forecast-encompassing tests on the
-   one-step and the free-run errors, :func:`_compare`); of the kept ones one
-   goes in (:func:`_choose`);
-4. repeat until no test points to an effect that survives, or ``max_effects``.
+1. the residual over the fitting segment goes through every test of
+   :mod:`fosmodel.diagnose` (the periodic and nonlinearity tests on its fast
+   part, so that a wandering bias is not taken for either);
+2. each fired test gives a candidate effect (:func:`fosmodel.effects.effects_from`);
+   any slow test (trend, step, Allan) also offers the *local level*, the
+   wandering bias as a stochastic level (:mod:`fosmodel.levels`);
+3. each candidate's terms are added to the FOS candidate set, the model refit
+   on the fitting segment, and judged out of sample (:mod:`fosmodel.judge`):
+   on the evaluation segment, from the end of the fitting segment and from
+   earlier origins; a deterministic drift or step must also beat the level;
+4. of the candidates kept, the one with the largest out-of-sample gain goes in;
+5. repeat until no test points to an effect that survives, or ``max_effects``.
 
 The prediction segment is never used to decide; it gives the before/after
-numbers of the report.
+numbers of the report, and says so when an effect made one of them worse.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping
+import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
+from scipy.ndimage import uniform_filter1d
 
 from .candidates import Term
+from .derived import fast_name
 from .diagnose import (
+    AuxChannels,
     Finding,
     allan,
     aux_correlation,
@@ -41,15 +45,13 @@ from .diagnose import (
 )
 from .effects import CandidateFamily, Effect, effects_from
 from .exceptions import InputError
-from .metrics import (
-    equivalent_position_error,
-    free_run_errors,
-    one_step_mse,
-    outage_metrics,
-    to_si_scale,
-)
+from .judge import Forecasts, compare, forecasts, outage_windows, passes, verdict
+from .levels import level_name, level_series, level_tau, levels_for
+from .metrics import equivalent_position_error, one_step_mse, outage_metrics, to_si_scale
 from .model import BoundModel, FOSModel
 from .validation import as_channels, as_signal
+
+Progress = Callable[[str], None]
 
 
 @dataclass(frozen=True)
@@ -82,6 +84,16 @@ class LoopConfig:
         Outage windows of the evaluation-segment test.
     fos_stop : str
         FOS stopping rule.
+    origins : int
+        Fit origins of the out-of-sample test, evenly spaced from half the
+        fitting segment to its end (1: its end only).
+    slow_s : float
+        Time scale (s) separating slow errors (level, drift, steps) from fast
+        ones: the periodic and nonlinearity tests look at the residual minus
+        its moving mean over ``slow_s``, at frequencies above ``1 / slow_s``.
+    level_taus : tuple of float, optional
+        Time constants (s) of the level candidates; by default chosen from the
+        fitting segment (:func:`fosmodel.levels.level_grid`).
     """
 
     rate: float
@@ -100,6 +112,9 @@ class LoopConfig:
     n_starts: int = 20
     taus: tuple[float, ...] = (1.0, 10.0, 30.0)
     fos_stop: str = "korenberg"
+    origins: int = 4
+    slow_s: float = 20.0
+    level_taus: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.rate) and self.rate > 0):
@@ -113,15 +128,24 @@ class LoopConfig:
                              "fractions of the record adding up to less than 1")
         if isinstance(self.max_lag, bool) or int(self.max_lag) != self.max_lag or self.max_lag < 1:
             raise InputError(f"max_lag must be an integer >= 1, got {self.max_lag!r}")
+        if isinstance(self.origins, bool) or int(self.origins) != self.origins \
+                or self.origins < 1:
+            raise InputError(f"origins must be an integer >= 1, got {self.origins!r}")
 
 
 @dataclass
 class Step:
-    """One effect the loop kept: what it was, why, and the errors after it."""
+    """One effect the loop kept: what it was, why, and the errors after it.
+
+    ``lag`` is an auxiliary channel's dead time (the lag of its first selected
+    term) and ``tau_s`` a level's time constant (its first selected level) or a
+    drift's warm-up time constant.
+    """
 
     effect: Effect
     terms_added: list[str]
     lag: int | None
+    tau_s: float | None
     comparison: dict
     predict: dict
 
@@ -132,7 +156,7 @@ class LoopResult:
 
     ``before``/``after`` are the prediction-segment metrics of the starting and the
     final model; ``steps`` the kept effects in order; ``rejected`` the candidates
-    that did not beat noise on the evaluation segment; ``findings_before`` and
+    that did not survive the evaluation; ``findings_before`` and
     ``findings_after`` the diagnostics of the first and the last model, and
     ``unexplained`` the tests still firing at the end.
     """
@@ -149,10 +173,17 @@ class LoopResult:
     final_model: BoundModel
     residual_before: np.ndarray = field(repr=False)
     residual_after: np.ndarray = field(repr=False)
+    level_taus: tuple[float, ...] = ()
 
     @property
     def unexplained(self) -> list[str]:
-        return [f.test for f in self.findings_after if f.fired]
+        """Tests still firing at the end (an auxiliary channel's test by its channel)."""
+        return [f.test + (f" {f.evidence['channel']}" if f.test == "aux" else "")
+                for f in self.findings_after if f.fired]
+
+    def worse(self, tolerance: float = 0.02) -> list[str]:
+        """Prediction-segment numbers the final model made worse by more than ``tolerance``."""
+        return worse_metrics(self.before, self.after, tolerance)
 
     def to_json_dict(self) -> dict:
         """``{"before", "after", "effects", ...}`` as ``fosmodel close-loop --json`` writes it."""
@@ -161,7 +192,8 @@ class LoopResult:
             e = step.effect
             effects.append({
                 "kind": e.kind, "channel": e.channel, "lag": step.lag, "freq_hz": e.freq_hz,
-                "time_s": e.time_s, "form": e.form, "tau_s": e.tau_s,
+                "time_s": e.time_s, "form": e.form, "tau_s": step.tau_s,
+                "taus_offered": list(e.taus) if e.taus else None,
                 "terms_added": step.terms_added,
                 "evidence": {**e.evidence, "evaluation": step.comparison},
                 "mse_before": mse, "mse_after": step.predict["mse"],
@@ -169,12 +201,28 @@ class LoopResult:
             mse = step.predict["mse"]
         return {"before": self.before, "after": self.after, "effects": effects,
                 "rejected": self.rejected, "unexplained": self.unexplained,
+                "worse_on_prediction": self.worse(),
+                "level_taus_offered": list(self.level_taus),
                 "segments_s": {k: [s.start / self.config.rate, s.stop / self.config.rate]
                                for k, s in self.segments.items()}}
 
 
+def worse_metrics(before: dict, after: dict, tolerance: float = 0.02) -> list[str]:
+    """The metrics (one-step MSE, outage position error, bias RMS at each tau) that ``after``
+    has more than ``1 + tolerance`` times higher than ``before``."""
+    pairs = [("one-step MSE", before["mse"], after["mse"]),
+             ("outage MSE", before["outage_mse"], after["outage_mse"]),
+             ("outage position error", before["outage_position_error_m"],
+              after["outage_position_error_m"])]
+    pairs += [(f"{t} s bias RMS", before["bias_rms"][t], after["bias_rms"][t])
+              for t in before["bias_rms"]]
+    return [f"{name} x{b / a:.3g}" for name, a, b in pairs
+            if a is not None and b is not None and a > 0 and b > (1 + tolerance) * a]
+
+
 def close_loop(
-    y: object, channels: Mapping[str, object] | None, config: LoopConfig
+    y: object, channels: Mapping[str, object] | None, config: LoopConfig,
+    progress: Progress | None = None,
 ) -> LoopResult:
     """Run the residual loop on a record.
 
@@ -186,46 +234,65 @@ def close_loop(
         Other columns of the record that may explain the residual (temperature,
         another sensor), each as long as ``y``.
     config : LoopConfig
+    progress : callable, optional
+        Called with a line of text as each model is fitted and each effect tried.
 
     Returns
     -------
     LoopResult
     """
+    say = progress or (lambda _: None)
     y = as_signal(y, "the record")
     channels = as_channels(channels, list(channels or {}), len(y))
     segments = _segments(len(y), config)
-    time = np.arange(len(y)) / config.rate
-    fit = _Fitter(y, channels, time, segments["train"], config)
+    fitter = _Fitter(y, channels, segments, config)
+    taus = config.level_taus if config.level_taus is not None else levels_for(
+        y[segments["train"]], config.rate)
+    clock = time.perf_counter()
     family = CandidateFamily(config.max_lag)
-    current = base = fit(family)
-    findings = findings_before = _diagnose(current, y, channels, time, segments, config)
+    current = base = fitter.fit(family)
+    say(f"starting model: {len(base.model.terms_)} terms ({time.perf_counter() - clock:.1f} s)")
+    diagnose = _Diagnostics(y, channels, segments, config)
+    findings = findings_before = diagnose(current)
     residual_before = _residual(current, y, segments)
-    steps, rejected, added = [], [], []
+    steps, rejected, added, waiting = [], [], [], []
     while len(steps) < config.max_effects:
-        candidates = [e for e in effects_from(findings, config.aux_max_lag)
+        found = effects_from(findings, config.aux_max_lag, taus, config.slow_s)
+        candidates = [e for e in [*found, *(w for w in waiting
+                                            if not any(w.same_as(f) for f in found))]
                       if not any(e.same_as(a) for a in added)]
-        kept = []
-        for effect in candidates:
-            trial_family = family.add(effect, channels, time, segments["train"])
-            trial = fit(trial_family)
-            comparison = _compare(current, trial, y, segments["evaluate"], config)
-            if comparison["accepted"]:
-                kept.append((effect, trial_family, trial, comparison))
-            else:
+        if not candidates:
+            break
+        say(f"round {len(steps) + 1}: {len(candidates)} effect(s) to try")
+        judge = _Judge(fitter, current, y, segments, config)
+        trials = []
+        for i, effect in enumerate(candidates, 1):
+            clock = time.perf_counter()
+            trial_family = family.add(effect, channels, len(y), config.rate, segments["train"])
+            trial = fitter.fit(trial_family)
+            trials.append((effect, trial_family, trial, judge(trial, effect)))
+            say(f"  [{i}/{len(candidates)}] {effect.describe()}: "
+                f"{_verdict_text(trials[-1][3])} ({time.perf_counter() - clock:.1f} s)")
+        kept, waiting = _screen(trials, judge)
+        for effect, _, _, comparison in trials:
+            if not any(k[0] is effect for k in kept):
                 rejected.append({"effect": effect.describe(), "kind": effect.kind,
-                                 "evidence": effect.evidence, "evaluation": comparison})
+                                 "round": len(steps) + 1, "evidence": effect.evidence,
+                                 "evaluation": comparison})
         if not kept:
             break
         effect, family, model, comparison = _choose(kept)
         steps.append(Step(effect, _new_terms(current, model), _lag_of(effect, model),
-                          comparison, _metrics(model, y, segments["predict"], config)))
+                          _tau_of(effect, model), comparison,
+                          _metrics(model, y, segments["predict"], config)))
         added.append(effect)
         current = model
-        findings = _diagnose(current, y, channels, time, segments, config)
+        say(f"kept {effect.describe()}")
+        findings = diagnose(current)
     return LoopResult(config, segments, _metrics(base, y, segments["predict"], config),
                       _metrics(current, y, segments["predict"], config), steps, rejected,
                       findings_before, findings, base, current, residual_before,
-                      _residual(current, y, segments))
+                      _residual(current, y, segments), tuple(taus))
 
 
 def score_family(
@@ -240,8 +307,7 @@ def score_family(
     y = as_signal(y, "the record")
     channels = as_channels(channels, list(channels or {}), len(y))
     segments = _segments(len(y), config)
-    time = np.arange(len(y)) / config.rate
-    model = _Fitter(y, channels, time, segments["train"], config)(family)
+    model = _Fitter(y, channels, segments, config).fit(family)
     return _metrics(model, y, segments["predict"], config)
 
 
@@ -261,139 +327,257 @@ def _segments(n: int, config: LoopConfig) -> dict[str, slice]:
 
 
 class _Fitter:
-    """Fits a FOS model of a candidate family on the fitting segment of one record."""
+    """Fits the FOS model of a candidate family on the fitting segment of one record, and
+    refits its weights on shorter pasts.
 
-    def __init__(self, y, channels, time, train, config):
-        self.y, self.channels, self.time, self.train, self.config = y, channels, time, train, config
+    The record's level series are computed once and passed with the inputs
+    (a model would recompute them at every prediction and free run).
+    """
 
-    def __call__(self, family: CandidateFamily) -> BoundModel:
-        inputs = {**{ch: self.channels[ch] for ch in family.exog_lags}, **family.columns}
+    def __init__(self, y, channels, segments, config):
+        self.y, self.channels, self.config = y, channels, config
+        self.train = segments["train"]
+        self._levels: dict[str, np.ndarray] = {}
+
+    def levels(self, taus: tuple[float, ...]) -> dict[str, np.ndarray]:
+        for tau in taus:
+            name = level_name(tau)
+            if name not in self._levels:
+                self._levels[name] = level_series(self.y, tau, self.config.rate)
+        return {level_name(tau): self._levels[level_name(tau)] for tau in taus}
+
+    def fit(self, family: CandidateFamily) -> BoundModel:
+        inputs = {**family.inputs, **family.columns, **self.levels(family.levels)}
         model = FOSModel(max_lag=family.max_lag, degree=family.degree,
                          exog_lags=dict(family.exog_lags), columns=list(family.columns),
-                         stop=self.config.fos_stop)
+                         levels=list(family.levels), rate=self.config.rate,
+                         product_lags=family.product_lags, stop=self.config.fos_stop)
         model.fit(self.y[self.train], {k: v[self.train] for k, v in inputs.items()})
         return BoundModel(model, inputs)
 
+    def refit(self, bound: BoundModel, stop: int) -> BoundModel:
+        """``bound`` with its weights fitted on the samples before ``stop``."""
+        past = {k: v[:stop] for k, v in bound.inputs.items()}
+        return BoundModel(bound.model.refit_weights(self.y[:stop], past), bound.inputs)
+
+
+class _Judge:
+    """Judges trial models against the current one out of sample (:mod:`fosmodel.judge`).
+
+    The current model's refits and forecasts from every origin are computed once
+    per round.  An origin from which a trial's new terms cannot be estimated (a
+    step after it: the refit drops them) cannot judge it, and is left out.
+    """
+
+    def __init__(self, fitter: _Fitter, current: BoundModel, y, segments, config) -> None:
+        self.fitter, self.y, self.config = fitter, y, config
+        self.segment = segments["evaluate"]
+        self.horizon = round(config.eval_horizon_s * config.rate)
+        self.starts = outage_windows(self.segment, self.horizon)
+        end = segments["train"].stop
+        self.origins = np.unique(np.linspace(end / 2, end, config.origins).round().astype(int))
+        if len(self.origins) > 1 and self.origins[0] <= max(4 * config.max_lag, 100):
+            self.origins = self.origins[-1:]  # too short a past to refit on
+        self.refits = [self._refit(current, o) for o in self.origins]
+        self.current = [self._forecasts(m) for m in self.refits]
+
+    def _refit(self, model: BoundModel, origin: int) -> BoundModel:
+        return model if origin == self.origins[-1] else self.fitter.refit(model, int(origin))
+
+    def _forecasts(self, model: BoundModel) -> Forecasts:
+        return forecasts(model, self.y, self.segment, self.starts, self.horizon)
+
+    def _earlier(self, trial: BoundModel, origin: int, current: BoundModel,
+                 base: Forecasts) -> dict | None:
+        refit = self._refit(trial, origin)
+        if set(refit.model.terms_) <= set(current.model.terms_):  # nothing new estimable
+            return None
+        return compare(base, self._forecasts(refit), self.config.accept_alpha)
+
+    def __call__(self, trial: BoundModel, effect: Effect, all_origins: bool = False) -> dict:
+        """The comparison at the fitting segment's end, the gains from the earlier origins,
+        and the verdict (``"kept_on"``: the error kind it is kept on, or None).
+
+        The halves of the segment judge every effect but the level: they catch a
+        function of time that runs on, while a level holds still beyond its data,
+        as the model without it does, and its bias gains are the noisiest.  The
+        earlier origins are looked at only for a trial that passes at the end
+        (or with ``all_origins``); otherwise their gains are None.
+        """
+        alpha, halves = self.config.accept_alpha, effect.kind != "level"
+        last = compare(self.current[-1], self._forecasts(trial), alpha)
+        out = dict(last)
+        out["origins_s"] = [float(o / self.config.rate) for o in self.origins]
+        if not (passes(last, halves) or all_origins):
+            out.update(one_step_gain_origins=None, outage_gain_origins=None, kept_on=None,
+                       accepted=False)
+            return out
+        found = [self._earlier(trial, o, m, f) for o, m, f in
+                 zip(self.origins[:-1], self.refits[:-1], self.current[:-1])] + [last]
+        for name in ("one_step", "outage"):
+            out[f"{name}_gain_origins"] = [None if f is None else f[f"{name}_gain"]
+                                           for f in found]
+        out["kept_on"] = verdict(last, [f for f in found[:-1] if f is not None], alpha, halves)
+        out["accepted"] = out["kept_on"] is not None
+        return out
+
+
+def _verdict_text(comparison: dict) -> str:
+    parts = []
+    for name, label in (("outage", "outage"), ("one_step", "one-step")):
+        text = f"{label} gain {comparison[f'{name}_gain']:+.2%}"
+        if comparison[f"{name}_gain_origins"]:
+            text += " (from earlier origins " + ", ".join(
+                "-" if g is None else f"{g:+.1%}"
+                for g in comparison[f"{name}_gain_origins"][:-1]) + ")"
+        parts.append(text)
+    head = (f"kept on {comparison['kept_on'].replace('_', '-')}: " if comparison["accepted"]
+            else "rejected: ")
+    return head + ", ".join(parts)
+
+
+def _screen(trials: list[tuple], judge: _Judge) -> tuple[list[tuple], list[Effect]]:
+    """The accepted trials that may go in this round, and the effects that wait for the
+    next; the others' comparisons say why not.
+
+    Slow errors are mostly stochastic, so the level is the form a slow
+    relation must beat, and clearly: a drift, a step or a channel with its
+    slow part (its full form) is kept only if, from every origin, it removes
+    at least :data:`SLOW_MARGIN` of the outage error the level leaves; a
+    channel's full form must beat its own fast form the same way, and a
+    function of absolute time (drift, step) every channel accepted in the
+    round, an observed cause.  And while the level is accepted in a round,
+    slow relations wait: they are tried again in the next round, on top of it
+    (whether or not their tests still fire).  A slow relation between two
+    sensors' wanders can hold over the evaluation and break the next hour; a
+    level cannot break that way, and a function of time fitted on one stretch
+    is an extrapolation.
+    """
+    by_key = {(t[0].kind, t[0].channel, t[0].form): t for t in trials}
+
+    def gains(key) -> list[float] | None:
+        if key not in by_key:
+            return None
+        effect, _, model, comparison = by_key[key]
+        if comparison["outage_gain_origins"] is None:  # rejected early: judge every origin
+            comparison.update({k: v for k, v in judge(model, effect, all_origins=True).items()
+                               if k.endswith("_origins")})
+        return comparison["outage_gain_origins"]
+
+    level = by_key.get(("level", None, None))
+    level_in = level is not None and level[3]["accepted"]
+    kept, waiting = [], []
+    for effect, family, model, comparison in trials:
+        if not comparison["accepted"]:
+            continue
+        keys = {"level": ("level", None, None) if effect.is_slow else None,
+                "fast form": ("aux", effect.channel, "fast")
+                if effect.kind == "aux" and effect.is_slow else None}
+        if effect.kind in ("drift", "step"):  # a function of time against observed causes
+            keys.update({f"channel {k[1]}": k for k in by_key if k[0] == "aux"
+                         and by_key[k][3]["accepted"]})
+        ours = comparison["outage_gain_origins"]
+        better = [name for name, key in keys.items() if key in by_key and not (
+            _clearly_better(ours[-1:], [by_key[key][3]["outage_gain"]])  # the end first
+            and _clearly_better(ours, gains(key)))]
+        if better:
+            comparison.update(accepted=False, kept_on=None,
+                              reason=f"not clearly better than the {better[0]}")
+        elif level_in and effect.is_slow:
+            comparison.update(accepted=False, kept_on=None,
+                              reason="waits for the level: tried again on top of it")
+            waiting.append(effect)
+        else:
+            kept.append((effect, family, model, comparison))
+    return kept, waiting
+
+
+SLOW_MARGIN = 0.2
+
+
+def _clearly_better(gains: list[float], rival: list[float]) -> bool:
+    """Whether, from every origin, ``gains`` remove at least :data:`SLOW_MARGIN` of the
+    error that ``rival`` leaves: ``(g - r) / (1 - r) >= SLOW_MARGIN``."""
+    return all(g - r >= SLOW_MARGIN * (1.0 - r) for g, r in zip(gains, rival)
+               if g is not None and r is not None)
+
 
 def _residual(model: BoundModel, y: np.ndarray, segments) -> np.ndarray:
-    """One-step residual over the fitting and evaluation segments, from the lag window on."""
-    stop = segments["evaluate"].stop
+    """One-step residual over the fitting segment, from the lag window on."""
+    stop = segments["train"].stop
     return (y[:stop] - model.predict(y[:stop]))[model.lag_window_:]
 
 
-def _diagnose(model, y, channels, time, segments, config) -> list[Finding]:
-    """Every diagnostic on the residual of the fitting and evaluation segments."""
-    stop, n0 = segments["evaluate"].stop, model.lag_window_
-    r, t = _residual(model, y, segments), time[n0:stop]
-    q = config.nonlinear_lags
-    lagged = np.column_stack([y[n0 - k : stop - k] for k in range(1, q + 1)]) if n0 >= q else None
-    findings = [whiteness(r, alpha=config.alpha),
-                periodic(r, t, config.rate, alpha=config.alpha)]
-    if channels:
-        findings += aux_correlation(r, {k: v[n0:stop] for k, v in channels.items()},
-                                    config.aux_max_lag, alpha=config.alpha)
-    if lagged is not None:
-        findings.append(nonlinearity(r, lagged, alpha=config.alpha))
-    findings += [trend(r, t, alpha=config.alpha), change_point(r, t, alpha=config.alpha),
-                 allan(r, config.rate, alpha=config.alpha)]
-    return findings
+def _fast(x: np.ndarray, rate: float, slow_s: float) -> np.ndarray:
+    """``x`` minus its centred moving mean over ``slow_s`` seconds (along axis 0)."""
+    width = max(3, round(slow_s * rate))
+    return x - uniform_filter1d(x, width, axis=0, mode="nearest")
 
 
-def _compare(a: BoundModel, b: BoundModel, y, segment: slice, config: LoopConfig) -> dict:
-    """Does ``b`` beat ``a`` on ``segment`` by more than noise would, all along it?
+class _Diagnostics:
+    """Every diagnostic on the residual of the fitting segment.
 
-    Two forecast-encompassing tests: does the change ``b`` makes to ``a``'s
-    predictions explain ``a``'s errors?  ``beta = sum(e_a d) / sum(d^2)`` with
-    ``d`` the change, and its t statistic from the spread over groups: ten
-    contiguous batches for the one-step errors, consecutive outage windows of
-    ``eval_horizon_s`` (at most :data:`MAX_WINDOWS`, evenly spread) for the
-    free-run errors.  With no effect, ``beta`` is centred
-    on 0 (the candidate was fit on other samples).  ``b`` is kept if either test
-    is significant at ``accept_alpha / 2`` (one-sided) and the same errors' mean
-    square is lower with ``b`` over the segment and, on a segment of at least
-    ``2 * MIN_HALF_WINDOWS`` outage windows, over each of its halves: an
-    effect that helps only next to the fitting data (a trend fit there, which
-    then runs on) fades or turns in the later half.  On a shorter segment the
-    halves' errors are too few to tell that from noise.
+    Only the fitting segment: a step's time, a drift's time constant, a line's
+    frequency found on the evaluation segment would fit it, and the evaluation
+    would then judge its own choice.  The periodic and nonlinearity tests read
+    the fast part of the residual (and of the lagged outputs): a wandering bias
+    leaves a steep low-frequency spectrum and products that track it, which
+    are neither a line nor a nonlinearity.  The other channels are prepared
+    once (they do not change between models).
     """
-    stop = segment.stop
-    pa, pb = a.predict(y[:stop])[segment], b.predict(y[:stop])[segment]
-    ea = y[segment] - pa
-    h = round(config.eval_horizon_s * config.rate)
-    starts = np.arange(segment.start, stop - h + 1, h)
-    if len(starts) > MAX_WINDOWS:  # enough for the t test; spread over the segment
-        starts = starts[np.linspace(0, len(starts) - 1, MAX_WINDOWS).round().astype(int)]
-    fa = free_run_errors(a, y, starts, h)
-    fb = free_run_errors(b, y, starts, h)
-    groups = {"one_step": list(zip(np.array_split(ea, 10), np.array_split(pb - pa, 10))),
-              "outage": list(zip(fa, fa - fb))}
-    judge_halves = len(starts) >= 2 * MIN_HALF_WINDOWS
-    out, accepted = {"halves_judged": judge_halves}, False
-    for name, pairs in groups.items():
-        beta, t, p = _encompassing(pairs)
-        half = len(pairs) // 2
-        gain, halves = _gain(pairs), [_gain(pairs[:half]), _gain(pairs[half:])]
-        out.update({f"{name}_gain": gain, f"{name}_gain_halves": halves, f"{name}_beta": beta,
-                    f"{name}_t": t, f"{name}_p": p})
-        judged = [gain, *halves] if judge_halves else [gain]
-        accepted |= p < config.accept_alpha / 2 and min(judged) > 0
-    out["accepted"] = accepted
-    return out
 
+    def __init__(self, y, channels, segments, config) -> None:
+        self.y, self.channels, self.config = y, channels, config
+        self.stop = segments["train"].stop
+        self._aux: dict[int, AuxChannels] = {}
 
-def _gain(groups: list[tuple[np.ndarray, np.ndarray]]) -> float:
-    """Share of the errors' sum of squares that the change removes: 1 - |e - d|^2 / |e|^2."""
-    before = sum(float(e @ e) for e, _ in groups)
-    after = sum(float((e - d) @ (e - d)) for e, d in groups)
-    return 1.0 - after / before if before > 0 else 0.0
-
-
-def _encompassing(groups: list[tuple[np.ndarray, np.ndarray]]) -> tuple[float, float, float]:
-    """``beta`` of the errors on the change, its one-sided t statistic and p-value.
-
-    ``groups`` are (errors, change) pairs; the standard error comes from the
-    spread of the groups' contributions (len(groups) - 1 degrees of freedom).
-    """
-    num = np.array([float(e @ d) for e, d in groups])
-    den = np.array([float(d @ d) for _, d in groups])
-    if den.sum() <= 0 or len(groups) < 2:
-        return math.nan, math.nan, 1.0
-    beta = float(num.sum() / den.sum())
-    spread = num - beta * den
-    se = math.sqrt(float(spread @ spread) * len(groups) / (len(groups) - 1)) / den.sum()
-    if se == 0:
-        return beta, (math.inf if beta > 0 else 0.0), (0.0 if beta > 0 else 1.0)
-    t = beta / se
-    return beta, t, float(stats.t.sf(t, len(groups) - 1))
-
-
-MAX_WINDOWS = 100  # most outage windows of the evaluation test
-MIN_HALF_WINDOWS = 20  # outage windows in each half of the evaluation segment to judge it
-STRONG_BIC = 6.0  # Kass and Raftery: a BIC difference of 6 or more is strong evidence
+    def __call__(self, model: BoundModel) -> list[Finding]:
+        config, rate, stop, n0 = self.config, self.config.rate, self.stop, model.lag_window_
+        r = (self.y[:stop] - model.predict(self.y[:stop]))[n0:]
+        t = np.arange(n0, stop) / rate
+        fast = _fast(r, rate, config.slow_s)
+        fmin = max(5 * rate / len(r), 1.0 / config.slow_s)
+        findings = [whiteness(r, alpha=config.alpha),
+                    periodic(fast, t, rate, alpha=config.alpha, fmin_hz=fmin)]
+        if self.channels:
+            if n0 not in self._aux:
+                self._aux[n0] = AuxChannels({k: v[n0:stop] for k, v in self.channels.items()})
+            findings += aux_correlation(r, self._aux[n0], config.aux_max_lag, alpha=config.alpha)
+        q = config.nonlinear_lags
+        if n0 >= q:
+            lagged = np.column_stack([self.y[n0 - k : stop - k] for k in range(1, q + 1)])
+            findings.append(nonlinearity(fast, _fast(lagged, rate, config.slow_s),
+                                         alpha=config.alpha))
+        findings += [trend(r, t, alpha=config.alpha), change_point(r, t, alpha=config.alpha),
+                     allan(r, rate, alpha=config.alpha)]
+        return findings
 
 
 def _choose(kept: list[tuple]) -> tuple:
-    """Which kept candidate goes in first.
+    """Which kept candidate goes in first: the largest out-of-sample gain.
 
-    An observed cause (an auxiliary channel) first; then periodic and nonlinear
-    effects, by their evaluation t statistic; then slow effects.  A drift and a
-    step can look alike both in the residual and over a short evaluation
-    segment: the form whose fit to the residual is strongly better (BIC gain at
-    least :data:`STRONG_BIC` higher) wins, otherwise the one that lowers the
-    evaluation outage error more.
+    The gain is that of the error kind it was kept on, averaged over the
+    origins; ties go to the larger t statistic.  Evidence and out-of-sample
+    gain decide, not a fixed order of kinds.  A drift and a step, which look
+    alike over a short stretch, are told apart by their fit to the residual
+    when it is strongly better (BIC difference of :data:`STRONG_BIC` or more).
     """
-    def t_of(item):
+    def key(item):
         c = item[3]
-        return max(v for v in (c["one_step_t"], c["outage_t"]) if v == v)
+        name = c["kept_on"]
+        gains = [g for g in c[f"{name}_gain_origins"] if g is not None]
+        return (float(np.mean(gains)), c[f"{name}_t"])
 
-    for kinds in (("aux",), ("periodic", "nonlinear")):
-        group = [k for k in kept if k[0].kind in kinds]
-        if group:
-            return max(group, key=t_of)
-    bic = {k[0].kind: k[0].evidence["evidence"]["bic_gain"] for k in kept}
-    if len(kept) == 2 and abs(bic["drift"] - bic["step"]) >= STRONG_BIC:
-        return max(kept, key=lambda k: bic[k[0].kind])
-    return max(kept, key=lambda k: k[3]["outage_gain"])
+    best = max(kept, key=key)
+    if best[0].kind in ("drift", "step"):
+        other = [k for k in kept if k[0].kind == {"drift": "step", "step": "drift"}[best[0].kind]]
+        bic = {k[0].kind: k[0].evidence["evidence"]["bic_gain"] for k in [best, *other[:1]]}
+        if other and abs(bic["drift"] - bic["step"]) >= STRONG_BIC:
+            return max([best, other[0]], key=lambda k: bic[k[0].kind])
+    return best
+
+
+STRONG_BIC = 6.0  # Kass and Raftery: a BIC difference of 6 or more is strong evidence
 
 
 def _new_terms(old: BoundModel, new: BoundModel) -> list[str]:
@@ -409,10 +593,24 @@ def _lag_of(effect: Effect, model: BoundModel) -> int | None:
     """
     if effect.kind != "aux":
         return None
+    channel = fast_name(effect.channel, effect.tau_s) if effect.form == "fast" else effect.channel
     for name in model.model.terms_:
-        lags = [lag for ch, lag in Term.parse(name).factors if ch == effect.channel]
+        lags = [lag for ch, lag in Term.parse(name).factors if ch == channel]
         if lags:
             return int(min(lags))
+    return None
+
+
+def _tau_of(effect: Effect, model: BoundModel) -> float | None:
+    """A level's time constant (its first selected level term), or a drift's."""
+    if effect.kind == "drift":
+        return effect.tau_s
+    if effect.kind != "level":
+        return None
+    for name in model.model.terms_:
+        taus = [level_tau(ch) for ch, _ in Term.parse(name).factors if level_tau(ch)]
+        if taus:
+            return taus[0]
     return None
 
 

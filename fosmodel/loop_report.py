@@ -8,20 +8,25 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from .closeloop import MIN_HALF_WINDOWS, LoopResult
+from .closeloop import LoopResult, worse_metrics
 from .diagnose import Finding
+from .judge import MIN_GAIN, MIN_HALF_WINDOWS
 from .output import write_text
 from .report import save_figure, write_tables
 from .summary import markdown_table
 
 
 def effects_table(result: LoopResult) -> pd.DataFrame:
-    """Prediction-segment metrics before the loop and after each effect it kept."""
+    """Prediction-segment metrics before the loop and after each effect it kept, with what
+    each effect made worse there (more than 2 %)."""
     taus = list(result.before["bias_rms"])
-    rows = [("before (starting model)", "", "", result.before)]
+    rows = [("before (starting model)", "", "", result.before, "")]
+    previous = result.before
     for step in result.steps:
         rows.append((step.effect.describe(), ", ".join(step.terms_added),
-                     _evidence(step.effect.evidence), step.predict))
+                     _evidence(step.effect.evidence), step.predict,
+                     "; ".join(worse_metrics(previous, step.predict)) or "nothing"))
+        previous = step.predict
     u = result.config.units or "units"
     frame = pd.DataFrame([{
         "Model": name, "Terms added": terms, "Evidence": evidence,
@@ -29,7 +34,8 @@ def effects_table(result: LoopResult) -> pd.DataFrame:
         f"Outage MSE ({u})^2": m["outage_mse"],
         f"Outage position error (m, {result.config.horizon_s:g} s)": m["outage_position_error_m"],
         **{f"Bias RMS {t} s ({u})": m["bias_rms"][t] for t in taus},
-    } for name, terms, evidence, m in rows])
+        "Worse than the row above": worse,
+    } for name, terms, evidence, m, worse in rows])
     return frame.dropna(axis=1, how="all")
 
 
@@ -150,14 +156,22 @@ def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
                     diagnostics: pd.DataFrame) -> str:
     cfg, seg = result.config, result.segments
     spans = ", ".join(f"{k} {s.start / cfg.rate:g}-{s.stop / cfg.rate:g} s" for k, s in seg.items())
+    origins = ", ".join(f"{o:g}" for o in _origins(result)) or "the fitting segment's end"
     lines = [
         f"# Residual loop: {title}", "",
         f"Segments: {spans}. Starting model: FOS, lags 1-{cfg.max_lag}, CP 1. Each diagnostic "
-        f"is a test at level {cfg.alpha:g}; an effect is kept only if it lowers the evaluation "
-        f"segment's one-step or outage error beyond noise (forecast-encompassing t test at "
-        f"{cfg.accept_alpha:g}), over the segment and, when each half holds at least "
-        f"{MIN_HALF_WINDOWS} outage windows, over each of its halves. The prediction segment "
-        "decides nothing: it gives the numbers below.", "",
+        f"is a test at level {cfg.alpha:g} on the fitting segment's residual. An effect is kept "
+        f"only if it lowers the evaluation segment's one-step error or its outage bias (mean "
+        f"free-run error over {cfg.eval_horizon_s:g} s windows) beyond noise (forecast-"
+        f"encompassing t test at {cfg.accept_alpha:g}) by at least {MIN_GAIN:.1%}, over the "
+        f"segment and, when each half holds at least {MIN_HALF_WINDOWS} windows, over each "
+        f"half (not asked of a level, which holds still beyond its data); and if, with its "
+        f"weights refitted on the past before earlier origins ({origins} s), it still loses "
+        "nothing on that segment. A drift, a step or a channel's slow part must also clearly "
+        "beat the local level. Level time constants offered: "
+        + (", ".join(f"{t:g}" for t in result.level_taus) or "none") + " s. "
+        "The prediction segment decides nothing: it gives the numbers below.", "",
+        _verdict_line(result), "",
         "## Before and after, prediction segment", "", markdown_table(effects, digits=4), "",
         "## Diagnostics of the first and the final model", "",
         markdown_table(diagnostics, digits=3), "",
@@ -165,7 +179,9 @@ def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
     if result.rejected:
         lines += ["## Candidates that did not survive the evaluation segment", ""]
         for r in result.rejected:
-            lines.append(f"- {r['effect']}: {evaluation_text(r['evaluation'])}")
+            reason = r["evaluation"].get("reason")
+            lines.append(f"- round {r.get('round', 1)}, {r['effect']}: "
+                         f"{evaluation_text(r['evaluation'])}" + (f"; {reason}" if reason else ""))
         lines.append("")
     if result.unexplained:
         lines += [f"Still firing at the end, with no effect that survives: "
@@ -176,12 +192,42 @@ def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
 
 def evaluation_text(ev: dict) -> str:
     """A candidate's evaluation in words: each test's gain, p-value and, when judged, its
-    gains on the two halves of the segment."""
+    gains on the two halves of the segment and from the earlier origins."""
     parts = []
-    for name, label in (("one_step", "one-step"), ("outage", "outage")):
+    for name, label in (("one_step", "one-step"), ("outage", "outage bias")):
         text = f"{label} gain {ev[f'{name}_gain']:.2g} (p {ev[f'{name}_p']:.2g}"
         if ev.get("halves_judged"):
             first, second = ev[f"{name}_gain_halves"]
             text += f"; halves {first:.2g}, {second:.2g}"
+        earlier = (ev.get(f"{name}_gain_origins") or [])[:-1]
+        if earlier:
+            text += "; earlier origins " + ", ".join(
+                "-" if g is None else f"{g:.2g}" for g in earlier)
         parts.append(text + ")")
     return ", ".join(parts)
+
+
+def _origins(result: LoopResult) -> list[float]:
+    for ev in [s.comparison for s in result.steps] + [r["evaluation"] for r in result.rejected]:
+        if ev.get("origins_s"):
+            return ev["origins_s"][:-1]
+    return []
+
+
+def _verdict_line(result: LoopResult) -> str:
+    """The outcome on the prediction segment, in one plain sentence."""
+    if not result.steps:
+        return "No effect survived the evaluation: the final model is the starting model."
+    b, a = result.before, result.after
+    change = [f"one-step MSE {a['mse'] / b['mse']:.3g}x"]
+    if b["outage_position_error_m"]:
+        change.append(f"{result.config.horizon_s:g} s outage position error "
+                      f"{a['outage_position_error_m'] / b['outage_position_error_m']:.3g}x")
+    last = list(b["bias_rms"])[-1]
+    if b["bias_rms"][last]:
+        change.append(f"{last} s bias RMS {a['bias_rms'][last] / b['bias_rms'][last]:.3g}x")
+    worse = result.worse()
+    return ("On the prediction segment, which chose nothing, the final model against the "
+            "starting one: " + ", ".join(change) + ". "
+            + (f"It is WORSE there in: {'; '.join(worse)}." if worse
+               else "Nothing there got worse by more than 2 %."))

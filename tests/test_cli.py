@@ -10,7 +10,8 @@ import pytest
 from records import bursty_csv, spiky_csv
 from scipy.signal import lfilter
 
-from fosmodel import cli
+from fosmodel import FOSModel, cli
+from fosmodel.levels import level_series, level_tau
 
 
 @pytest.fixture
@@ -193,17 +194,51 @@ def test_study_empty_file_exit_2(tmp_path, capsys):
 def test_close_loop_finds_an_undeclared_temperature_effect(tmp_path, capsys):
     rec = tmp_path / "rec.csv"
     assert cli.main(["synth", "undeclared_temperature", "--seed", "0", "--out", str(rec)]) == 0
-    out, js = tmp_path / "loop", tmp_path / "loop.json"
+    out, js, model = tmp_path / "loop", tmp_path / "loop.json", tmp_path / "final.json"
     code, stdout, err = _run(["close-loop", rec, "--column", "gyro_x", "--sensor", "gyro",
-                              "--units", "deg/s", "--out", out, "--json", js], capsys)
+                              "--units", "deg/s", "--out", out, "--json", js, "--model", model],
+                             capsys)
     assert code == 0, err
     assert "aux temp_c" in stdout and "written to" in stdout
+    # a progress line for the starting model, each round and each effect tried
+    assert "fosmodel: starting model: " in err and "fosmodel: round 1: " in err
+    assert "fosmodel:   [1/" in err and "fosmodel: kept aux temp_c" in err
     data = json.loads(js.read_text())
-    assert [e["kind"] for e in data["effects"]] == ["aux"]
-    assert data["effects"][0]["channel"] == "temp_c"
+    aux = [e for e in data["effects"] if e["kind"] == "aux"]
+    assert [e["channel"] for e in aux] == ["temp_c"] and not data["worse_on_prediction"]
     assert data["after"]["outage_mse"] < data["before"]["outage_mse"]
     for name in ("report.md", "effects.csv", "diagnostics.md", "residual.png", "residual.svg"):
         assert (out / name).exists()
+    # the final model is a model file: predict rebuilds its derived columns from the record
+    saved = json.loads(model.read_text())
+    assert saved["format"] == "fosmodel.FOSModel" and "sq(temp_c)" in saved["params"]["columns"]
+    pred = tmp_path / "pred.csv"
+    code, stdout, err = _run(["predict", rec, "--model", model, "--out", pred], capsys)
+    assert code == 0, err
+    frame = pd.read_csv(pred)
+    fitted = FOSModel.from_dict(saved)
+    y, temp = frame["gyro_x"].to_numpy(), pd.read_csv(rec)["temp_c"].to_numpy()
+    train = slice(0, round(0.5 * len(y)))
+    exog = {"temp_c": temp, "sq(temp_c)": (temp - temp[train].mean()) ** 2}
+    for name in fitted.spec_.level_names:
+        exog[name] = level_series(y, level_tau(name), 100.0)
+    np.testing.assert_allclose(frame["prediction"], fitted.predict(y, exog), rtol=1e-9,
+                               atol=1e-9)
+
+
+def test_fit_offers_levels(long_record, tmp_path, capsys):
+    model = tmp_path / "m.json"
+    code, out, err = _run(["fit", long_record, "--column", "accel_y", "--max-lag", 3,
+                           "--levels", "auto", "--out", model], capsys)
+    assert code == 0, err
+    assert "levels offered (below the Allan floor): " in out and "Levels offered" in out
+    saved = json.loads(model.read_text())
+    assert saved["params"]["rate"] == 10.0 and saved["params"]["levels"]
+    with pytest.raises(SystemExit) as exc:
+        _run(["fit", long_record, "--column", "accel_y", "--levels", "5,0", "--out", model],
+             capsys)
+    assert exc.value.code == 2
+    assert "expected 'auto' or time constants in seconds like 5,20" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

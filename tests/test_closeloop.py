@@ -1,13 +1,15 @@
-"""The residual loop on data_synth records whose effect nobody declared (issue 5)."""
+"""The residual loop on data_synth records whose effect nobody declared (issues 5 and 15)."""
 
 import numpy as np
 import pytest
+from scipy.signal import lfilter
 
 from data_synth import make_scenario
 from data_synth.true_effects import true_effects
-from fosmodel.closeloop import LoopConfig, _compare, close_loop, score_family
+from fosmodel.closeloop import LoopConfig, close_loop, score_family
 from fosmodel.effects import CandidateFamily
 from fosmodel.exceptions import InputError
+from fosmodel.judge import MIN_HALF_WINDOWS, compare, forecasts, outage_windows
 
 
 def _run(name, seed, **kw):
@@ -18,26 +20,30 @@ def _run(name, seed, **kw):
     return rec, y, channels, config, close_loop(y, channels, config)
 
 
+def _found(res, true):
+    """The kept step that is the true effect (kind, and channel for an input), or None."""
+    return next((s for s in res.steps if s.effect.kind == true.kind
+                 and (true.kind != "aux" or s.effect.channel == true.channel)), None)
+
+
 @pytest.mark.parametrize("seed", [0, 1])
-@pytest.mark.parametrize("name, kind", [
-    ("undeclared_temperature", "aux"), ("undeclared_vibration", "periodic"),
-    ("undeclared_nonlinear", "nonlinear"), ("undeclared_drift", "drift"),
-    ("undeclared_aux_lag", "aux"), ("undeclared_step", "step")])
-def test_loop_names_the_effect_and_recovers_half_of_what_the_truth_gives(name, kind, seed):
+@pytest.mark.parametrize("name", [
+    "undeclared_temperature", "undeclared_vibration", "undeclared_nonlinear",
+    "undeclared_drift", "undeclared_aux_lag", "undeclared_step"])
+def test_loop_finds_the_effect_and_recovers_half_of_what_the_truth_gives(name, seed):
     rec, y, channels, config, res = _run(name, seed)
-    assert [s.effect.kind for s in res.steps] == [kind]
-    step = res.steps[0]
     ((true, slow),) = true_effects(rec.truth)
-    metric = "outage_mse" if slow else "mse"
-    if kind == "aux":
-        assert step.effect.channel == true.channel
+    step = _found(res, true)
+    assert step is not None, [s.effect.describe() for s in res.steps]
+    # besides the effect, at most the local level (a slow error's stochastic form)
+    assert {s.effect.kind for s in res.steps} <= {true.kind, "level"}
     if name == "undeclared_aux_lag":
         assert step.lag == 3
-    if kind == "periodic":
+    if true.kind == "periodic":
         assert abs(step.effect.freq_hz - true.freq_hz) < 0.05
-    # the error the loop removes on the prediction segment, against the truth's
-    time = np.arange(len(y)) / rec.rate
-    family = CandidateFamily(config.max_lag).add(true, channels, time, res.segments["train"])
+    metric = "outage_mse" if slow else "mse"
+    family = CandidateFamily(config.max_lag).add(true, channels, len(y), rec.rate,
+                                                 res.segments["train"])
     truth = score_family(y, channels, config, family)
     before, after = res.before[metric], res.after[metric]
     assert before - after >= 0.5 * (before - truth[metric]) > 0
@@ -61,6 +67,39 @@ def test_two_effects_at_once_are_both_found():
     assert abs(freq - 7.3137) < 0.05
 
 
+def test_a_random_walk_bias_is_taken_as_a_level_not_a_function_of_time():
+    rng = np.random.default_rng(4)
+    n, rate = 60_000, 100.0
+    noise = lfilter([1.0], [1.0, -0.6, 0.1], rng.standard_normal(n)) * 0.3
+    y = noise + np.cumsum(rng.standard_normal(n)) * 0.004
+    config = LoopConfig(rate=rate, sensor="gyro", units="deg/s")
+    res = close_loop(y, {}, config)
+    kinds = [s.effect.kind for s in res.steps]
+    assert kinds[:1] == ["level"] and "drift" not in kinds
+    assert res.steps[0].tau_s in res.level_taus
+    assert res.after["bias_rms"]["30"] < res.before["bias_rms"]["30"]
+    assert not res.worse()
+
+
+def test_a_level_is_rejected_where_there_is_no_slow_error():
+    rng = np.random.default_rng(5)
+    y = lfilter([1.0], [1.0, -0.6, 0.1], rng.standard_normal(60_000)) * 0.3
+    config = LoopConfig(rate=100.0, level_taus=(0.5, 2.0, 8.0))
+    # the slow tests are what offer a level: force the offer by judging it directly
+    from fosmodel.closeloop import _Fitter, _Judge, _segments
+    from fosmodel.effects import Effect
+
+    segments = _segments(len(y), config)
+    fitter = _Fitter(y, {}, segments, config)
+    family = CandidateFamily(config.max_lag)
+    current = fitter.fit(family)
+    effect = Effect("level", taus=config.level_taus)
+    trial = fitter.fit(family.add(effect, {}, len(y), 100.0, segments["train"]))
+    verdict = _Judge(fitter, current, y, segments, config)(trial, effect)
+    assert not verdict["accepted"]
+    assert close_loop(y, {}, config).steps == []
+
+
 def test_the_prediction_segment_never_decides():
     rec, y, channels, config, res = _run("undeclared_vibration", 0)
     z = y.copy()
@@ -78,10 +117,13 @@ def test_json_has_the_documented_layout():
             "terms"}
     assert keys <= set(data["before"]) and keys <= set(data["after"])
     effect = data["effects"][0]
-    assert {"kind", "channel", "lag", "freq_hz", "evidence", "mse_before", "mse_after"} <= set(
-        effect)
+    assert {"kind", "channel", "lag", "freq_hz", "tau_s", "evidence", "mse_before",
+            "mse_after"} <= set(effect)
     assert effect["kind"] == "aux" and effect["channel"] == "accel_x" and effect["lag"] == 3
     assert effect["freq_hz"] is None and effect["mse_after"] < effect["mse_before"]
+    evaluation = effect["evidence"]["evaluation"]
+    assert len(evaluation["origins_s"]) == 4 and evaluation["kept_on"] in ("one_step", "outage")
+    assert {"worse_on_prediction", "level_taus_offered", "rejected"} <= set(data)
 
 
 class _LastPlus:
@@ -97,7 +139,14 @@ class _LastPlus:
         return np.full(n_steps, np.asarray(y_init)[-1])
 
 
-def test_a_change_that_helps_only_in_the_first_half_of_the_evaluation_is_not_kept():
+def _compare(a, b, y, segment, config):
+    horizon = round(config.eval_horizon_s * config.rate)
+    starts = outage_windows(segment, horizon)
+    return compare(forecasts(a, y, segment, starts, horizon),
+                   forecasts(b, y, segment, starts, horizon), config.accept_alpha)
+
+
+def test_a_change_that_helps_only_in_the_first_half_of_the_evaluation_does_not_pass():
     rng = np.random.default_rng(0)
     n, segment = 6000, slice(2000, 6000)
     jump = rng.standard_normal(n)
@@ -106,16 +155,17 @@ def test_a_change_that_helps_only_in_the_first_half_of_the_evaluation_is_not_kep
     base = _LastPlus(np.zeros(n))
     share = np.where(np.arange(n) < 4000, 1.0, -0.2)  # knows the jumps, then errs the other way
     fading = _compare(base, _LastPlus(share * jump), y, segment, config)
-    # significant over the whole segment, and lower errors there: the old rule kept it
+    # significant over the whole segment, and lower errors there
     assert fading["one_step_p"] < config.accept_alpha / 2 and fading["one_step_gain"] > 0.05
     first, second = fading["one_step_gain_halves"]
-    assert fading["halves_judged"] and first > 0 > second and not fading["accepted"]
+    assert fading["halves_judged"] and first > 0 > second
+    assert "one_step" in fading["passes_whole"] and "one_step" not in fading["passes"]
     steady = _compare(base, _LastPlus(0.4 * jump), y, segment, config)
-    assert min(steady["one_step_gain_halves"]) > 0 and steady["accepted"]
-    # 20 outage windows of 5 s: too few to judge halves; the whole segment decides
+    assert min(steady["one_step_gain_halves"]) > 0 and "one_step" in steady["passes"]
+    # too few outage windows to judge halves: the whole segment decides
     short = _compare(base, _LastPlus(share * jump), y, slice(3500, 4500), config)
-    assert not short["halves_judged"] and short["one_step_gain_halves"][1] < 0
-    assert short["accepted"]
+    assert 2 * MIN_HALF_WINDOWS > 20 and not short["halves_judged"]
+    assert short["one_step_gain_halves"][1] < 0 and "one_step" in short["passes"]
 
 
 def test_too_short_a_record_is_refused():
