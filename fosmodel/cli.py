@@ -299,7 +299,7 @@ def _study_records(args: argparse.Namespace, path: str) -> list[_SensorRecord]:
         rate=rec.require_rate(), sensor=args.sensor, units=args.units, orders=args.orders,
         degrees=args.degrees, methods=args.methods, protocols=protocols, train_s=args.split[0],
         evaluate_s=args.split[1], horizon_s=args.horizon, n_starts=args.starts,
-        paper_denoise=args.denoise, fos_stop=args.stop,
+        paper_denoise=args.denoise, fos_stop=args.stop, levels=not args.no_levels,
     )
     records = []
     for column in args.columns:
@@ -580,6 +580,8 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("--methods", type=_name_list, default=["fos", "yw", "cov", "burg", "gm"],
                        help="comma-separated among fos,yw,cov,burg,gm (default all)")
     study.add_argument("--protocol", choices=("paper", "fair", "both"), default="both")
+    study.add_argument("--no-levels", action="store_true",
+                       help="leave out the methods about the local level (fair protocol)")
     study.add_argument("--split", type=_split_arg, default=(180.0, 180.0),
                        help="training and evaluation seconds (default 180,180)")
     study.add_argument("--horizon", type=_positive_float, default=30.0,

@@ -32,6 +32,8 @@ from scipy.signal import oaconvolve
 from .candidates import OUTPUT, Term
 from .levels import is_level, level_gain, level_tau
 
+_BLOCK = 64  # rows of the response computed one by one; the rest a block at a time
+
 
 @dataclass(frozen=True)
 class NonlinearTerm:
@@ -113,7 +115,6 @@ def split_expansion(
 
 def _responses(phi, gains, weights, n_steps):
     p, j = len(phi), len(gains)
-    c = np.r_[phi, weights]
     m = np.zeros((p + j, p + j))
     if p:
         m[1:p, : p - 1] = np.eye(p - 1)
@@ -122,18 +123,47 @@ def _responses(phi, gains, weights, n_steps):
     if p:
         g[0] = 1.0
     g[p:] = gains
-    m += np.outer(g, c)
-    r = np.empty((n_steps, p + j))
-    row = c.copy()
+    return linear_responses(m, g, np.r_[phi, weights], n_steps)
+
+
+def linear_responses(m: np.ndarray, g: np.ndarray, c: np.ndarray,
+                     n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(R, h)`` of the linear recursion ``y[n] = c z[n] + d[n]``, ``z[n+1] = A z[n] + g y[n]``
+    over ``n_steps`` samples, ``m = A`` (``R[k] = c M^k``, ``h[0] = 1``, ``h[k] = c M^(k-1) g``
+    with ``M = A + g c``): a run is ``R z[s] + h * d``."""
+    m = m + np.outer(g, c)
+    r = np.empty((n_steps, len(c)))
+    row = np.asarray(c, dtype=float).copy()
+    block = min(n_steps, _BLOCK)
     with np.errstate(over="ignore", invalid="ignore"):
-        for k in range(n_steps):
+        for k in range(block):
             r[k] = row
             row = row @ m
+        power = np.linalg.matrix_power(m, block)
+        for k in range(block, n_steps, block):  # a block of rows at a time: R[k+j] = R[j] M^k
+            stop = min(k + block, n_steps)
+            r[k:stop] = r[k - block : stop - block] @ power
     h = np.empty(n_steps)
     if n_steps:
         h[0] = 1.0
         h[1:] = r[:-1] @ g
     return r, h
+
+
+def superpose(r: np.ndarray, h: np.ndarray, state: np.ndarray, drive: np.ndarray) -> np.ndarray:
+    """Linear runs from the states (K, D) with the drives (K, H): ``R z + h * d``, NaN in a
+    row from its first non-finite sample."""
+    n_steps = drive.shape[1]
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = state @ r[:n_steps].T
+        if np.ptp(drive, axis=1).max(initial=0.0) == 0.0:  # a constant drive: the step response
+            out += drive[:, :1] * np.cumsum(h[:n_steps])
+        else:
+            out += oaconvolve(drive, h[None, :n_steps], axes=1)[:, :n_steps]
+    bad = ~np.isfinite(out)
+    if bad.any():
+        out[np.cumsum(bad, axis=1) > 0] = np.nan
+    return out
 
 
 def run_one(ex: Expansion, past: np.ndarray, levels: np.ndarray, drive: np.ndarray,
@@ -207,37 +237,42 @@ def run_many(ex: Expansion, past: np.ndarray, levels: np.ndarray, drive: np.ndar
 
 def _superposition(ex, hist, levels, drive):
     """Linear runs: ``R z[s]`` plus the drive convolved with ``h``."""
-    n_steps = drive.shape[1]
-    r, h = ex.responses(n_steps)
-    state = np.hstack([hist[:, ::-1], levels])
-    forced = state @ r.T
-    if np.ptp(drive, axis=1).max(initial=0.0) == 0.0:  # a constant drive: the step response
-        return forced + drive[:, :1] * np.cumsum(h)
-    return forced + oaconvolve(drive, h[None, :], axes=1)[:, :n_steps]
+    r, h = ex.responses(drive.shape[1])
+    return superpose(r, h, np.hstack([hist[:, ::-1], levels]), drive)
 
 
 def _recursion(ex, hist, levels, drive, rests):
-    """Nonlinear runs: the recursion of :func:`run_one`, one sample of every run at a time."""
+    """Nonlinear runs: the recursion of :func:`run_one`, one sample of every run at a time.
+
+    Each step is a few array operations whatever the number of terms: the
+    linear lags and levels as two products, the nonlinear terms as a gather
+    of their factors (output lags, levels, or ones where a term has fewer)
+    multiplied column by column.
+    """
     k, n_steps = drive.shape
-    p = hist.shape[1]
+    p, j = hist.shape[1], levels.shape[1]
     y = np.hstack([hist, np.empty((k, n_steps))])
     lv = levels.copy()
-    lags = [(int(j) + 1, float(ex.phi[j])) for j in np.flatnonzero(ex.phi)]
-    nonlinear = [(t.coef, r, t.lags, t.levels) for t, r in zip(ex.nonlinear, rests)]
+    phi = ex.phi[::-1].copy()  # against the window y[n-p .. n-1]
+    width = max(len(t.lags) + len(t.levels) for t in ex.nonlinear)
+    # factor f of term t reads column index[t, f] of [window, levels, 1]
+    index = np.full((len(ex.nonlinear), width), p + j)
+    for t, term in enumerate(ex.nonlinear):
+        cols = [p - lag for lag in term.lags] + [p + i for i in term.levels]
+        index[t, : len(cols)] = cols
+    coef = np.array([t.coef for t in ex.nonlinear])
+    rest = np.stack([np.ones((k, n_steps)) if r is None else r for r in rests], axis=1)
+    state = np.ones((k, p + j + 1))
     for step in range(n_steps):
         n = p + step
-        value = drive[:, step].copy()
-        for lag, c in lags:
-            value += c * y[:, n - lag]
-        if len(lv.T):
+        state[:, :p], state[:, p : p + j] = y[:, n - p : n], lv
+        value = drive[:, step] + state[:, :p] @ phi
+        if j:
             value += lv @ ex.weights
-        for c, rest, t_lags, t_levels in nonlinear:
-            prod = np.full(k, c) if rest is None else c * rest[:, step]
-            for lag in t_lags:
-                prod *= y[:, n - lag]
-            for j in t_levels:
-                prod *= lv[:, j]
-            value += prod
+        prod = rest[:, :, step] * coef
+        for f in range(width):
+            prod *= state[:, index[:, f]]
+        value += prod.sum(axis=1)
         y[:, n] = value
         lv += ex.gains * (value[:, None] - lv)
     return y[:, p:]

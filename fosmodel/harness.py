@@ -15,6 +15,14 @@ Two protocols:
 ``fair``
     Every method is fit and scored on the same raw data.
 
+With ``levels`` (the default), the fair protocol also has every method about
+the local level, the wandering bias as a stochastic level (:mod:`fosmodel.levels`):
+``fos+level`` offers FOS the level candidates (a grid below the training
+segment's Allan floor) beside the lags, each weighed freely; ``burg+level``,
+``yw+level``, ``cov+level`` and ``gm+level`` fit the estimator to the record
+minus one level (weight one, :class:`fosmodel.levelar.LocalLevelAR`), its time
+constant chosen from the same grid on the evaluation segment like the order.
+
 Denoising is applied to the training samples alone for fitting (so that no
 later sample leaks into a fit through the filter), and to the whole record for
 scoring.  Runtime is measured around ``fit`` only.
@@ -43,12 +51,15 @@ from .baselines import METHOD_LABELS, make_baseline
 from .blas import one_blas_thread
 from .denoise import DENOISERS, denoise
 from .exceptions import InputError, UnstableModelWarning
+from .levelar import LocalLevelAR
+from .levels import levels_for
 from .metrics import equivalent_position_error, one_step_mse, outage_metrics, to_si_scale
 from .model import FOSModel
 from .validation import as_signal
 
 METHODS = ("fos", "yw", "cov", "burg", "gm")
 PROTOCOLS = ("paper", "fair")
+LEVEL = "+level"  # suffix of a method about the local level
 
 
 @dataclass(frozen=True)
@@ -108,6 +119,8 @@ class StudyConfig:
         Denoiser of the baselines under the paper protocol (``wavelet`` or ``kaiser``).
     fos_stop : str
         FOS stopping rule.
+    levels : bool
+        Also fit every method about the local level, under the fair protocol.
     """
 
     rate: float
@@ -124,6 +137,7 @@ class StudyConfig:
     taus: Sequence[float] = (1.0, 10.0, 30.0)
     paper_denoise: str = "wavelet"
     fos_stop: str = "korenberg"
+    levels: bool = True
 
     def __post_init__(self) -> None:
         for name in ("orders", "degrees", "methods", "protocols", "taus"):
@@ -140,20 +154,26 @@ class StudyConfig:
         if self.horizon_s <= 0 or self.n_starts < 1:
             raise InputError("the outage horizon must be positive and n_starts at least 1")
 
-    def configurations(self) -> list[tuple[str, int, int]]:
-        """Every (method, order, degree) to fit: FOS at each degree, AR at degree 1, GM once."""
+    def configurations(self, protocol: str = "fair") -> list[tuple[str, int, int]]:
+        """Every (method, order, degree) to fit under ``protocol``: FOS at each degree, AR at
+        degree 1, GM once; with ``levels``, under the fair protocol, each again about the
+        local level (method ``<method>+level``)."""
         out = []
+        level_too = self.levels and protocol == "fair"
         for method in self.methods:
-            if method == "gm":
-                out.append(("gm", 1, 1))
-            else:
-                degrees = self.degrees if method == "fos" else (1,)
-                out.extend((method, int(L), int(d)) for L in self.orders for d in degrees)
+            names = [method, method + LEVEL] if level_too else [method]
+            for name in names:
+                if method == "gm":
+                    out.append((name, 1, 1))
+                else:
+                    degrees = self.degrees if method == "fos" else (1,)
+                    out.extend((name, int(L), int(d)) for L in self.orders for d in degrees)
         return out
 
     def denoiser(self, protocol: str, method: str) -> str | None:
         """The denoiser a method's data go through under a protocol (None: raw data)."""
-        return self.paper_denoise if protocol == "paper" and method != "fos" else None
+        return (self.paper_denoise if protocol == "paper" and not method.startswith("fos")
+                else None)
 
 
 def _check_choices(what: str, given: Sequence[str], valid: Sequence[str]) -> None:
@@ -164,16 +184,27 @@ def _check_choices(what: str, given: Sequence[str], valid: Sequence[str]) -> Non
         raise InputError(f"unknown {what} {bad[0]!r}; choose from {', '.join(valid)}")
 
 
-def make_model(method: str, order: int, degree: int, config: StudyConfig):
-    """A fresh, unfitted model of one configuration."""
-    if method == "fos":
-        return FOSModel(max_lag=order, degree=degree, stop=config.fos_stop)
-    return make_baseline(method, order, rate=config.rate)
+def make_model(method: str, order: int, degree: int, config: StudyConfig,
+               level_taus: Sequence[float] = (), level_tau: float | None = None):
+    """A fresh, unfitted model of one configuration.
+
+    ``fos+level`` is offered the levels ``level_taus``; a baseline about the level
+    (``burg+level``, ...) uses the one level ``level_tau``.
+    """
+    base, about_level = method.removesuffix(LEVEL), method.endswith(LEVEL)
+    if base == "fos":
+        return FOSModel(max_lag=order, degree=degree, stop=config.fos_stop,
+                        levels=list(level_taus) if about_level else None,
+                        rate=config.rate if about_level else None)
+    model = make_baseline(base, order, rate=config.rate)
+    return LocalLevelAR(model, level_tau, config.rate) if about_level else model
 
 
 def method_label(method: str, degree: int) -> str:
-    """``FOS CP=2``, ``Burg``, ...: the name of a method in tables and figures."""
-    return f"FOS CP={degree}" if method == "fos" else METHOD_LABELS[method]
+    """``FOS CP=2``, ``Burg``, ``Burg + level``...: the name of a method in tables and figures."""
+    base = method.removesuffix(LEVEL)
+    label = f"FOS CP={degree}" if base == "fos" else METHOD_LABELS[base]
+    return label + (" + level" if method.endswith(LEVEL) else "")
 
 
 @dataclass
@@ -191,15 +222,19 @@ class StudyResult:
     split : Split
     warnings : list of str
         What deserves the reader's attention (e.g. unstable fitted models).
+    level_taus : tuple of float
+        The level time constants (s) offered about the local level.
     """
 
     rows: pd.DataFrame
     config: StudyConfig
     split: Split
     warnings: list[str] = field(default_factory=list)
+    level_taus: tuple[float, ...] = ()
 
     def best(self) -> pd.DataFrame:
-        """Per protocol and method (FOS per degree), the row with the lowest evaluation MSE."""
+        """Per protocol and method (FOS per degree), the row with the lowest evaluation MSE
+        (over the orders and, about the level, the level's time constants)."""
         idx = self.rows.groupby(["protocol", "method", "degree"], sort=False)["evaluate_mse"]
         return self.rows.loc[idx.idxmin()].reset_index(drop=True)
 
@@ -217,7 +252,7 @@ class StudyResult:
         return {"config": cfg,
                 "split_samples": {k: [s.start, s.stop] for k, s in asdict(self.split).items()},
                 "rows": records(self.rows), "best": records(self.best()),
-                "warnings": list(self.warnings)}
+                "warnings": list(self.warnings), "level_taus_s": list(self.level_taus)}
 
 
 def _json_value(v: object) -> object:
@@ -239,12 +274,15 @@ class FitTask:
     order, degree : int
     denoiser : str or None
         The denoiser of the data (None: raw data).
+    level_tau : float, optional
+        The level's time constant (s) of a baseline about the level.
     """
 
     method: str
     order: int
     degree: int
     denoiser: str | None
+    level_tau: float | None = None
 
 
 @dataclass(frozen=True)
@@ -268,18 +306,22 @@ class StudyPlan:
         whole record to score against.
     tasks : tuple of FitTask
         Every distinct fit, in the order the rows first need it.
+    level_taus : tuple of float
+        The level time constants (s) offered, chosen from the training segment.
     """
 
     config: StudyConfig
     split: Split
     signals: dict[str | None, tuple[np.ndarray, np.ndarray]]
     tasks: tuple[FitTask, ...]
+    level_taus: tuple[float, ...] = ()
 
     def __reduce__(self) -> tuple:
-        return _unpickle_plan, (self.config, self.split, self.signals, self.tasks)
+        return _unpickle_plan, (self.config, self.split, self.signals, self.tasks,
+                                self.level_taus)
 
 
-def _unpickle_plan(config, split, signals, tasks) -> StudyPlan:
+def _unpickle_plan(config, split, signals, tasks, level_taus=()) -> StudyPlan:
     """A plan with its own copy of the signals.
 
     Unpickled arrays may lie at any byte offset of a received buffer (Dask's
@@ -287,7 +329,7 @@ def _unpickle_plan(config, split, signals, tasks) -> StudyPlan:
     order: the results would differ from this process's in the last bit.
     """
     signals = {d: tuple(np.array(a) for a in pair) for d, pair in signals.items()}
-    return StudyPlan(config, split, signals, tasks)
+    return StudyPlan(config, split, signals, tasks, level_taus)
 
 
 def plan_study(y: object, config: StudyConfig) -> StudyPlan:
@@ -304,16 +346,24 @@ def plan_study(y: object, config: StudyConfig) -> StudyPlan:
         len(y), config.rate, config.train_s, config.evaluate_s,
         min_predict=max(horizon + 1, 2 * round(tau * config.rate)),
         why=f" (a {config.horizon_s:g} s outage horizon and two {tau:g} s bias windows)")
-    tasks = tuple(dict.fromkeys(task for _, task in _row_tasks(config)))
+    level_taus = levels_for(y[split.train], config.rate) if config.levels else ()
+    tasks = tuple(dict.fromkeys(task for _, task in _row_tasks(config, level_taus)))
     signals = {d: _signals(y, split, d, config.rate)
                for d in dict.fromkeys(t.denoiser for t in tasks)}
-    return StudyPlan(config, split, signals, tasks)
+    return StudyPlan(config, split, signals, tasks, tuple(level_taus))
 
 
-def _row_tasks(config: StudyConfig) -> list[tuple[str, FitTask]]:
-    """(protocol, task) of every row of the study, in row order."""
-    return [(protocol, FitTask(method, order, degree, config.denoiser(protocol, method)))
-            for protocol in config.protocols for method, order, degree in config.configurations()]
+def _row_tasks(config: StudyConfig, level_taus: Sequence[float]) -> list[tuple[str, FitTask]]:
+    """(protocol, task) of every row of the study, in row order: a baseline about the level
+    once per level time constant."""
+    out = []
+    for protocol in config.protocols:
+        for method, order, degree in config.configurations(protocol):
+            denoiser = config.denoiser(protocol, method)
+            taus = (level_taus if method.endswith(LEVEL) and method != "fos" + LEVEL
+                    else [None])
+            out += [(protocol, FitTask(method, order, degree, denoiser, tau)) for tau in taus]
+    return out
 
 
 def run_task(plan: StudyPlan, task: FitTask) -> FitScore:
@@ -323,7 +373,8 @@ def run_task(plan: StudyPlan, task: FitTask) -> FitScore:
     (runtime aside) in this process or on any worker.
     """
     with one_blas_thread():
-        return _score(task, *plan.signals[task.denoiser], plan.split, plan.config)
+        return _score(task, *plan.signals[task.denoiser], plan.split, plan.config,
+                      plan.level_taus)
 
 
 def assemble(plan: StudyPlan, scores: Sequence[FitScore]) -> StudyResult:
@@ -333,10 +384,12 @@ def assemble(plan: StudyPlan, scores: Sequence[FitScore]) -> StudyResult:
     scored = dict(zip(plan.tasks, scores))
     rows = [{"protocol": protocol, "method": task.method,
              "label": method_label(task.method, task.degree), "order": task.order,
-             "degree": task.degree, "data": task.denoiser or "raw", **scored[task].row}
-            for protocol, task in _row_tasks(plan.config)]
+             "degree": task.degree, "data": task.denoiser or "raw",
+             "level_tau_s": np.nan if task.level_tau is None else task.level_tau,
+             **scored[task].row}
+            for protocol, task in _row_tasks(plan.config, plan.level_taus)]
     notes = sorted({note for score in scores for note in score.notes})
-    return StudyResult(pd.DataFrame(rows), plan.config, plan.split, notes)
+    return StudyResult(pd.DataFrame(rows), plan.config, plan.split, notes, plan.level_taus)
 
 
 def run_studies(
@@ -410,8 +463,9 @@ def _signals(y, split, denoiser, rate) -> tuple[np.ndarray, np.ndarray]:
     return denoise(train, rate, denoiser), denoise(y, rate, denoiser)
 
 
-def _score(task: FitTask, fit_signal, score_signal, split, config) -> FitScore:
-    model = make_model(task.method, task.order, task.degree, config)
+def _score(task: FitTask, fit_signal, score_signal, split, config, level_taus) -> FitScore:
+    model = make_model(task.method, task.order, task.degree, config, level_taus,
+                       task.level_tau)
     t0 = time.perf_counter()
     model.fit(fit_signal)
     runtime = time.perf_counter() - t0

@@ -52,6 +52,7 @@ from .levels import (
     check_level_rate,
     check_level_series,
     level_after,
+    level_series,
     level_tau,
     with_levels,
 )
@@ -345,9 +346,8 @@ class FOSModel(BaseEstimator):
             mu = self.offsets_[OUTPUT]
             given = self._given_levels(exog, y_arr, mu, lo)
             missing = [name for name in self.spec_.level_names if name not in given]
-            if missing:
-                computed = with_levels({OUTPUT: y_arr - mu}, missing, self.rate, OUTPUT)
-                given.update({name: computed[name][lo:] for name in missing})
+            for name in missing:  # of the raw output: a level of y - mu is its level - mu
+                given[name] = level_series(y_arr, level_tau(name), self.rate)[lo:] - mu
             signals.update(given)
         return signals
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import pandas as pd
 from matplotlib.figure import Figure
 
-from .harness import StudyResult, method_label
+from .harness import LEVEL, StudyResult, method_label
 from .output import atomic_write, write_text
 from .summary import markdown_table
 
@@ -48,7 +48,7 @@ def paper_table(result: StudyResult, orders: tuple[int, ...] = (1, 10)) -> pd.Da
     baselines appear on denoised data (paper protocol) and on raw data (fair).
     Gauss-Markov is a first-order model and appears in the order-1 block.
     """
-    rows = result.rows
+    rows = result.rows[~result.rows["method"].str.endswith(LEVEL)]
     rows = rows[rows["order"].isin(orders) | (rows["method"] == "gm")]
     rows = rows.drop_duplicates(subset=["method", "order", "degree", "data"])
     blocks = []
@@ -64,6 +64,24 @@ def paper_table(result: StudyResult, orders: tuple[int, ...] = (1, 10)) -> pd.Da
     return frame[keep].rename(columns=cols).reset_index(drop=True)
 
 
+def level_table(result: StudyResult) -> pd.DataFrame:
+    """Fair protocol: each method's best configuration as it is and about the local level.
+
+    FOS about the level is offered level candidates it weighs freely; a baseline
+    about the level is fitted to the record minus one level (weight one), whose
+    time constant is chosen on the evaluation segment with the order.
+    """
+    best = result.best()
+    best = best[best["protocol"] == "fair"]
+    cols = _headers(result)
+    keep = ["label", "order", "level_tau_s", "mse", "outage_position_error_m",
+            f"bias_rms_{max(result.config.taus):g}s", "n_terms"]
+    frame = best.assign(_level=best["method"].str.endswith(LEVEL)).sort_values(
+        ["_level", "method", "degree"], kind="stable")
+    return frame[keep].rename(columns={**cols, "level_tau_s": "Level tau (s)"}).reset_index(
+        drop=True)
+
+
 def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
     """``stem.md``, ``stem.csv`` and ``stem.tex`` in ``out_dir``."""
     paths = [out_dir / f"{stem}.{ext}" for ext in ("md", "csv", "tex")]
@@ -77,6 +95,9 @@ def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
     """One-step prediction MSE and outage position error against model order, per method."""
     cfg = result.config
     rows = result.rows[result.rows["protocol"] == protocol]
+    # about the level a baseline has a row per time constant: the one chosen on evaluation
+    rows = rows.loc[rows.groupby(["method", "order", "degree"], sort=False)["evaluate_mse"]
+                    .idxmin()]
     fig = Figure(figsize=(10, 4.2), layout="constrained")
     axes = fig.subplots(1, 2)
     for ax, col, ylabel in (
@@ -86,8 +107,9 @@ def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
     ):
         for (method, degree), group in rows.groupby(["method", "degree"], sort=False):
             label = method_label(method, degree)
-            if method == "gm":
-                ax.axhline(group[col].iloc[0], ls="--", color="0.5", label=label)
+            if method.removesuffix(LEVEL) == "gm":
+                ax.axhline(group[col].iloc[0], ls="--" if method == "gm" else ":", color="0.5",
+                           label=label)
             else:
                 group = group.sort_values("order")
                 ax.plot(group["order"], group[col], marker="o", label=label)
@@ -118,6 +140,8 @@ def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
     paths = write_tables(paper_table(result), out_dir, "comparison")
     paths += write_tables(study_table(result), out_dir, "study")
     paths += write_tables(study_table(result, result.best()), out_dir, "best")
+    if result.config.levels and "fair" in result.config.protocols:
+        paths += write_tables(level_table(result), out_dir, "level")
     figures = []
     for protocol in result.config.protocols:
         figures += save_figure(order_figure(result, protocol, title), out_dir, f"order_{protocol}")
@@ -146,6 +170,18 @@ def report_markdown(result: StudyResult, title: str) -> str:
         "## Best configuration per method (chosen on the evaluation segment)", "",
         markdown_table(study_table(result, result.best()), digits=4), "",
     ]
+    if cfg.levels and "fair" in cfg.protocols:
+        taus = ", ".join(f"{t:g}" for t in result.level_taus) or "none (record too short)"
+        lines += [
+            "## About the local level (fair protocol)", "",
+            "The wandering bias as a stochastic level (the exponentially weighted mean of the "
+            "output's past, time constants " + taus + " s, chosen below the training "
+            "segment's Allan floor). FOS + level: FOS offered these levels beside its lags, "
+            "each weighed freely. Baseline + level: the estimator fitted to the record minus "
+            "one level (weight one), the level's time constant chosen on the evaluation "
+            "segment with the order. Compare each method with its own + level row, and FOS + "
+            "level with the best baseline + level.", "",
+            markdown_table(level_table(result), digits=4), ""]
     for protocol in cfg.protocols:
         lines += [f"![{protocol} protocol](order_{protocol}.png)", ""]
     if result.warnings:

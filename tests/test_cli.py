@@ -161,9 +161,19 @@ def test_study_writes_report_and_json(long_record, tmp_path, capsys):
     assert "Yule-Walker" in stdout and "FOS CP=2" in stdout and "written to" in stdout
     assert (out / "report.md").exists() and (out / "order_fair.svg").exists()
     data = json.loads(js.read_text())
-    assert len(data["rows"]) == 2 * (3 * 2 + 3 * 3 + 1)
+    n_taus = len(data["level_taus_s"])
+    # both protocols, then about the level (fair): FOS once, each baseline per time constant
+    assert n_taus == 4 and len(data["rows"]) == 2 * (3 * 2 + 3 * 3 + 1) + 3 * 2 + n_taus * 10
     assert {"method", "order", "degree", "mse", "position_error_m", "outage_mse", "bias_rms",
-            "outage_position_error_m", "runtime_s", "n_terms", "protocol"} <= set(data["rows"][0])
+            "outage_position_error_m", "runtime_s", "n_terms", "protocol",
+            "level_tau_s"} <= set(data["rows"][0])
+    assert "## About the local level (fair protocol)" in (out / "report.md").read_text()
+    code, stdout, err = _run(["study", long_record, "--column", "accel_y", "--sensor", "accel",
+                              "--units", "m/s^2", "--orders", "1", "--degrees", "1",
+                              "--split", "300,200", "--starts", "5", "--no-levels",
+                              "--out", tmp_path / "plain", "--json", js], capsys)
+    assert code == 0, err
+    assert not any(r["method"].endswith("+level") for r in json.loads(js.read_text())["rows"])
 
 
 @pytest.mark.parametrize(
@@ -338,7 +348,7 @@ def test_study_of_many_files_and_columns(tmp_path, capsys):
                for r in records)
     best = pd.read_csv(out / "best.csv")
     assert list(best.columns[:4]) == ["Record", "File", "Column", "Protocol"]
-    assert list(best["Record"].unique()) == records and len(best) == 4 * 5
+    assert list(best["Record"].unique()) == records and len(best) == 4 * 2 * 5  # +level too
     one = pd.read_csv(out / "imu2_gy" / "best.csv")
     pd.testing.assert_frame_equal(best[best["Record"] == "imu2_gy"].iloc[:, 3:].reset_index(
         drop=True), one)
@@ -346,7 +356,8 @@ def test_study_of_many_files_and_columns(tmp_path, capsys):
     data = json.loads(js.read_text())
     assert [(r["report"], r["column"]) for r in data["records"]] == [
         (r, r[-2:]) for r in records]
-    assert "study of 4 records, 36 fits written to" in stdout and "imu2_gy" in stdout
+    # per record 9 fits, and about the level FOS twice and the 7 baselines per time constant
+    assert "study of 4 records, 156 fits written to" in stdout and "imu2_gy" in stdout
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 

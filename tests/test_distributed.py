@@ -53,10 +53,14 @@ def test_cluster_gives_the_in_process_table(client):
 def test_fos_is_one_task_for_both_protocols():
     plan = plan_study(_record(1), CONFIG)
     n_fos, n_ar = len(CONFIG.orders) * len(CONFIG.degrees), 3 * len(CONFIG.orders)
-    assert len(plan.tasks) == n_fos + 2 * (n_ar + 1)  # baselines (and gm) per protocol
+    n_taus = len(plan.level_taus)
+    # baselines (and gm) per protocol; about the level (fair only) FOS once and the
+    # baselines once per level time constant
+    n_level = n_fos + n_taus * (n_ar + 1)
+    assert n_taus == 4 and len(plan.tasks) == n_fos + 2 * (n_ar + 1) + n_level
     assert set(plan.signals) == {None, "wavelet"}
     result = harness.assemble(plan, [harness.run_task(plan, task) for task in plan.tasks])
-    assert len(result.rows) == 2 * (n_fos + n_ar + 1)
+    assert len(result.rows) == 2 * (n_fos + n_ar + 1) + n_level
     fos = result.rows[result.rows["method"] == "fos"]
     assert (fos.groupby(["order", "degree"])["runtime_s"].nunique() == 1).all()
     with pytest.raises(ValueError, match="1 scores for"):
@@ -149,7 +153,7 @@ def _study(files, out, *extra):
 
 
 def _tables(out):
-    return {p.relative_to(out): pd.read_csv(p).drop(columns="Fit time (s)")
+    return {p.relative_to(out): pd.read_csv(p).drop(columns="Fit time (s)", errors="ignore")
             for p in sorted(out.rglob("*.csv"))}
 
 
@@ -166,6 +170,6 @@ def test_cli_on_a_cluster_writes_the_in_process_tables(two_files, tables_here, t
     there = ["--workers", "2"] if how == "--workers" else ["--scheduler", client.scheduler.address]
     assert _study(two_files, tmp_path / "out", *there) == 0, capsys.readouterr().err
     tables = _tables(tmp_path / "out")
-    assert len(tables) == 1 + 2 * 3 and tables.keys() == tables_here.keys()
+    assert len(tables) == 1 + 2 * 4 and tables.keys() == tables_here.keys()
     for name, table in tables_here.items():
         pd.testing.assert_frame_equal(table, tables[name], check_exact=True)

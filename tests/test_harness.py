@@ -24,7 +24,8 @@ def _ar3(n=30000, seed=0):
 
 def _config(**kw):
     base = dict(rate=RATE, sensor="accel", units="m/s^2", orders=(1, 2, 3, 4, 5, 6),
-                degrees=(1,), train_s=600.0, evaluate_s=300.0, horizon_s=30.0, n_starts=10)
+                degrees=(1,), train_s=600.0, evaluate_s=300.0, horizon_s=30.0, n_starts=10,
+                levels=False)
     return StudyConfig(**{**base, **kw})
 
 
@@ -132,6 +133,28 @@ def test_json_rows_have_the_documented_keys():
     assert all(keys <= set(row) for row in data["rows"] + data["best"])
     assert set(data["rows"][0]["bias_rms"]) == {"1", "10", "30"}
     assert len(data["best"]) == 4  # fos and gm under two protocols
+
+
+def test_every_method_is_also_fit_about_the_local_level():
+    """On a wandering bias, each method gains from the level; FOS weighs it freely."""
+    rng = np.random.default_rng(6)
+    n = 30000
+    y = _ar3(n, seed=6) + np.cumsum(rng.standard_normal(n)) * 2e-5
+    config = _config(orders=(3,), levels=True)
+    result = run_study(y, config)
+    rows = result.rows
+    assert set(rows[rows["protocol"] == "paper"]["method"]) == {"fos", "yw", "cov", "burg", "gm"}
+    fair = rows[rows["protocol"] == "fair"]
+    assert {m + "+level" for m in ("fos", "yw", "cov", "burg", "gm")} <= set(fair["method"])
+    taus = sorted(fair.loc[fair["method"] == "burg+level", "level_tau_s"])
+    assert len(taus) == 4 and all(np.isnan(fair.loc[fair["method"] == "fos+level",
+                                                    "level_tau_s"]))
+    best = result.best().query("protocol == 'fair'").set_index("method")
+    assert best.loc["burg+level", "label"] == "Burg + level"
+    assert best.loc["fos+level", "label"] == "FOS CP=1 + level"
+    for method in ("fos", "burg"):
+        assert (best.loc[method + "+level", "outage_position_error_m"]
+                < best.loc[method, "outage_position_error_m"])
 
 
 @pytest.mark.parametrize(

@@ -3,7 +3,7 @@ import pytest
 from scipy.signal import lfilter
 
 from fosmodel.harness import StudyConfig, run_study
-from fosmodel.report import paper_table, study_table, write_study
+from fosmodel.report import level_table, paper_table, study_table, write_study
 
 
 @pytest.fixture(scope="module")
@@ -28,13 +28,27 @@ def test_paper_table_layout(result):
 
 
 def test_study_table_has_every_row(result):
-    assert len(study_table(result)) == len(result.rows) == 2 * (3 * 2 + 3 * 3 + 1)
+    plain = 3 * 2 + 3 * 3 + 1  # FOS orders x degrees, three AR methods x orders, GM
+    about_level = 3 * 2 + 4 * (3 * 3 + 1)  # fair only: each baseline per level time constant
+    assert len(result.level_taus) == 4
+    assert len(study_table(result)) == len(result.rows) == 2 * plain + about_level
+
+
+def test_level_table_sets_each_method_beside_its_level_form(result):
+    table = level_table(result)
+    assert list(table["Method"]) == [
+        "Burg", "Covariance", "FOS CP=1", "FOS CP=2", "Gauss-Markov", "Yule-Walker",
+        "Burg + level", "Covariance + level", "FOS CP=1 + level", "FOS CP=2 + level",
+        "Gauss-Markov + level", "Yule-Walker + level"]
+    taus = table["Level tau (s)"]
+    assert taus[:6].isna().all() and taus[8:10].isna().all()
+    assert set(taus[[6, 7, 10, 11]]) <= set(result.level_taus)
 
 
 def test_write_study_writes_tables_figures_and_report(result, tmp_path):
     paths = write_study(result, tmp_path / "out", "Test study")
     names = {p.name for p in paths}
-    for stem in ("comparison", "study", "best"):
+    for stem in ("comparison", "study", "best", "level"):
         assert {f"{stem}.md", f"{stem}.csv", f"{stem}.tex"} <= names
     assert {"order_paper.png", "order_paper.svg", "order_fair.png", "order_fair.svg",
             "report.md"} <= names
@@ -43,4 +57,5 @@ def test_write_study_writes_tables_figures_and_report(result, tmp_path):
     assert "\\begin{tabular}" in (tmp_path / "out" / "comparison.tex").read_text()
     report = (tmp_path / "out" / "report.md").read_text()
     assert "# Test study" in report and "![fair protocol](order_fair.png)" in report
+    assert "## About the local level (fair protocol)" in report
     assert not [p for p in (tmp_path / "out").iterdir() if p.name.endswith(".tmp")]
