@@ -440,53 +440,52 @@ def _screen(trials: list[tuple], judge: _Judge) -> tuple[list[tuple], list[Effec
     """The accepted trials that may go in this round, and the effects that wait for the
     next; the others' comparisons say why not.
 
-    Slow errors are mostly stochastic, so the level is the form a slow
-    relation must beat, and clearly: a drift, a step or a channel with its
-    slow part (its full form) is kept only if, from every origin, it removes
-    at least :data:`SLOW_MARGIN` of the outage error the level leaves; a
-    channel's full form must beat its own fast form the same way, and a
-    function of absolute time (drift, step) every channel accepted in the
-    round, an observed cause.  And while the level is accepted in a round,
-    slow relations wait: they are tried again in the next round, on top of it
-    (whether or not their tests still fire).  A slow relation between two
-    sensors' wanders can hold over the evaluation and break the next hour; a
-    level cannot break that way, and a function of time fitted on one stretch
-    is an extrapolation.
+    Slow errors are mostly stochastic, and the forms of a slow error differ in
+    how they run on beyond the data: a level holds still, a channel runs only
+    as its cause does, a function of time runs on regardless.  So a function
+    of time (a drift, a step) waits while the level or a channel is accepted
+    in the round, and a channel with its slow part (its full form) waits for
+    an accepted level unless it beats it clearly: from every origin it
+    removes at least :data:`SLOW_MARGIN` of the outage error the level leaves.
+    What waits is tried again in the next round, on top of what went in,
+    whether or not its test still fires.  A channel's full form must also beat
+    its own fast form clearly.  A slow relation between two sensors' wanders
+    can hold over the evaluation and break the next hour, and a function of
+    time fitted on one stretch is an extrapolation.
     """
     by_key = {(t[0].kind, t[0].channel, t[0].form): t for t in trials}
 
-    def gains(key) -> list[float] | None:
-        if key not in by_key:
-            return None
+    def gains(key) -> list[float]:
         effect, _, model, comparison = by_key[key]
         if comparison["outage_gain_origins"] is None:  # rejected early: judge every origin
             comparison.update({k: v for k, v in judge(model, effect, all_origins=True).items()
                                if k.endswith("_origins")})
         return comparison["outage_gain_origins"]
 
-    level = by_key.get(("level", None, None))
-    level_in = level is not None and level[3]["accepted"]
+    def accepted(key) -> bool:
+        return key in by_key and by_key[key][3]["accepted"]
+
+    level = ("level", None, None)
+    channel_in = any(k[0] == "aux" and accepted(k) for k in by_key)
     kept, waiting = [], []
     for effect, family, model, comparison in trials:
         if not comparison["accepted"]:
             continue
-        keys = {"level": ("level", None, None) if effect.is_slow else None,
-                "fast form": ("aux", effect.channel, "fast")
-                if effect.kind == "aux" and effect.is_slow else None}
-        if effect.kind in ("drift", "step"):  # a function of time against observed causes
-            keys.update({f"channel {k[1]}": k for k in by_key if k[0] == "aux"
-                         and by_key[k][3]["accepted"]})
-        ours = comparison["outage_gain_origins"]
-        better = [name for name, key in keys.items() if key in by_key and not (
-            _clearly_better(ours[-1:], [by_key[key][3]["outage_gain"]])  # the end first
-            and _clearly_better(ours, gains(key)))]
-        if better:
+        ours, wait, reason = comparison["outage_gain_origins"], None, None
+        if effect.kind in ("drift", "step") and (accepted(level) or channel_in):
+            wait = "the level" if accepted(level) else "the channels"
+        elif effect.kind == "aux" and effect.is_slow:
+            fast = ("aux", effect.channel, "fast")
+            if fast in by_key and not _clearly_better(ours, gains(fast)):
+                reason = "not clearly better than its fast form"
+            elif accepted(level) and not _clearly_better(ours, gains(level)):
+                wait = "the level"
+        if wait:
             comparison.update(accepted=False, kept_on=None,
-                              reason=f"not clearly better than the {better[0]}")
-        elif level_in and effect.is_slow:
-            comparison.update(accepted=False, kept_on=None,
-                              reason="waits for the level: tried again on top of it")
+                              reason=f"waits for {wait}: tried again on top of it")
             waiting.append(effect)
+        elif reason:
+            comparison.update(accepted=False, kept_on=None, reason=reason)
         else:
             kept.append((effect, family, model, comparison))
     return kept, waiting

@@ -6,14 +6,14 @@ clear message where it is absent.  Writes every report, table and figure under
 this run, so every number there comes from it.
 
 * Model-order study (orders 1-10, FOS CP 1 and 2, every method, both
-  protocols) on every axis of the six ADIS16405 sessions and of the two
-  MPU-6050 records.
+  protocols, and every method about the local level under the fair protocol)
+  on every axis of the six ADIS16405 sessions and of the two MPU-6050 records.
 * Allan deviation and noise coefficients of every axis.
-* Residual loop on every axis of ADIS16405 sessions imu1 and imu4, of both
+* Residual loop on every axis of the six ADIS16405 sessions, of both
   MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped).
-* The effects the issue points to, checked one by one.
+* The effects the issues point to, checked one by one.
 
-Run: ``python studies/real_data.py`` (about half an hour on 2 cores).
+Run: ``python studies/real_data.py`` (about three quarters of an hour on 2 cores).
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ ADIS = {"gx_dps": ("gyro", "deg/s"), "gy_dps": ("gyro", "deg/s"), "gz_dps": ("gy
 SUNSIDED = {**ADIS}  # same column names and units
 TOMI = {"gx": ("gyro", "deg/s"), "gy": ("gyro", "deg/s"), "gz": ("gyro", "deg/s"),
         "ax": ("accel", "g"), "ay": ("accel", "g"), "az": ("accel", "g")}
-LOOP_ADIS = (1, 4)
+LOOP_ADIS = (1, 2, 3, 4, 5, 6)
 SUNSIDED_FILE = "unmoved-with-x-pointing-forward-10min.csv.gz"
 
 
@@ -71,15 +71,25 @@ def _best(result: StudyResult, protocol: str, methods: tuple[str, ...], col: str
     return rows.loc[rows[col].idxmin()]
 
 
+AR = ("yw", "cov", "burg", "gm")
+AR_LEVEL = tuple(m + "+level" for m in AR)
+OUTAGE = "outage_position_error_m"
+
+
 def study_row(record: str, axis: str, result: StudyResult) -> dict:
-    """Best FOS against the best AR / Gauss-Markov model, per protocol and metric."""
-    ar = ("yw", "cov", "burg", "gm")
+    """Best FOS against the best AR / Gauss-Markov model, per protocol and metric, and FOS
+    about the local level against the best baseline with and without it (30 s outage)."""
     out = {"Record": record, "Axis": axis}
     for protocol, col, label in (("fair", "mse", "fair, one-step MSE"),
-                                 ("fair", "outage_position_error_m", "fair, 30 s outage"),
+                                 ("fair", OUTAGE, "fair, 30 s outage"),
                                  ("paper", "mse", "paper, one-step MSE")):
-        fos, base = _best(result, protocol, ("fos",), col), _best(result, protocol, ar, col)
+        fos, base = _best(result, protocol, ("fos",), col), _best(result, protocol, AR, col)
         out[f"{label}: FOS / best AR"] = fos[col] / base[col]
+    level = _best(result, "fair", ("fos+level",), OUTAGE)[OUTAGE]
+    out["30 s outage: FOS+level / FOS"] = level / _best(result, "fair", ("fos",), OUTAGE)[OUTAGE]
+    out["30 s outage: FOS+level / best AR"] = level / _best(result, "fair", AR, OUTAGE)[OUTAGE]
+    out["30 s outage: FOS+level / best AR+level"] = level / _best(result, "fair", AR_LEVEL,
+                                                                  OUTAGE)[OUTAGE]
     fos = _best(result, "fair", ("fos",), "mse")
     out["best FOS (fair)"] = f"{fos['label']}, L={fos['order']}"
     return out
@@ -130,13 +140,19 @@ def run_allan(recs, mtig: Record) -> pd.DataFrame:
 def loop_row(record: str, axis: str, res: LoopResult) -> dict:
     b, a = res.before, res.after
     return {"Record": record, "Axis": axis,
-            "Effects kept": "; ".join(s.effect.describe() for s in res.steps) or "none",
-            "Rejected on evaluation": "; ".join(sorted({r["effect"] for r in res.rejected}))
-            or "none",
+            "Effects kept": "; ".join(_kept(s) for s in res.steps) or "none",
+            "Candidates rejected": len({r["effect"] for r in res.rejected}),
             "One-step MSE after / before": a["mse"] / b["mse"],
             "30 s outage position after / before": (a["outage_position_error_m"]
                                                     / b["outage_position_error_m"]),
             "30 s bias RMS after / before": a["bias_rms"]["30"] / b["bias_rms"]["30"]}
+
+
+def _kept(step) -> str:
+    """An effect as kept: a level with the time constant FOS chose first."""
+    if step.effect.kind == "level" and step.tau_s:
+        return f"local level (tau {step.tau_s:.3g} s)"
+    return step.effect.describe()
 
 
 def run_loops(recs, mtig_keep: Record, mtig_clip: Record) -> tuple[pd.DataFrame, dict]:
@@ -172,8 +188,8 @@ def temperature_check(rec: Record) -> pd.DataFrame:
         channels = {"temp_c": temp}
         base = score_family(y, channels, config, CandidateFamily(config.max_lag))
         family = CandidateFamily(config.max_lag).add(
-            Effect("aux", channel="temp_c", max_lag=2), channels,
-            np.arange(len(y)) / rec.rate, slice(0, round(config.train * len(y))))
+            Effect("aux", channel="temp_c", max_lag=2), channels, len(y), rec.rate,
+            slice(0, round(config.train * len(y))))
         warm = score_family(y, channels, config, family)
         means = y[:m].reshape(-1, n10).mean(axis=1), temp[:m].reshape(-1, n10).mean(axis=1)
         rows.append({"Axis": axis, "corr(10 s means, temp_c)": np.corrcoef(*means)[0, 1],
@@ -251,6 +267,27 @@ def _rejection(res: LoopResult, prefix: str) -> str:
 # -- README -----------------------------------------------------------------------------------
 
 
+def _ratio_line(frame: pd.DataFrame, col: str, text: str) -> str:
+    v = frame[col]
+    return (f"- {text}: median {v.median():.3g}, range {v.min():.3g}-{v.max():.3g}; lower on "
+            f"{int((v < 1).sum())} of {len(v)} axes.")
+
+
+def loop_lines(loops: pd.DataFrame) -> list[str]:
+    """The loop's prediction-segment ratios over every axis, and where any got worse."""
+    cols = ("30 s outage position after / before", "30 s bias RMS after / before")
+    worst = loops[list(cols)].max(axis=1)
+    worse = loops[worst > 1.02]
+    return [
+        _ratio_line(loops, "One-step MSE after / before", "One-step MSE after / before"),
+        _ratio_line(loops, cols[0], "30 s outage position error after / before"),
+        _ratio_line(loops, cols[1], "30 s bias RMS after / before"),
+        f"- Axes where the 30 s outage position error or the 30 s bias RMS ends more than 2 % "
+        f"worse: {len(worse)} of {len(loops)}"
+        + (": " + ", ".join(f"{r['Record']} {r['Axis']} ({max(r[cols[0]], r[cols[1]]):.3g})"
+                           for _, r in worse.iterrows()) if len(worse) else "") + "."]
+
+
 def summary_lines(studies: pd.DataFrame) -> list[str]:
     col_mse, col_out = "fair, one-step MSE: FOS / best AR", "fair, 30 s outage: FOS / best AR"
     col_paper = "paper, one-step MSE: FOS / best AR"
@@ -265,6 +302,12 @@ def summary_lines(studies: pd.DataFrame) -> list[str]:
         f"- Paper protocol (baselines on wavelet-denoised data), one-step MSE: FOS over the best "
         f"baseline, median {studies[col_paper].median():.3g} (range "
         f"{studies[col_paper].min():.3g}-{studies[col_paper].max():.3g}).",
+        _ratio_line(studies, "30 s outage: FOS+level / FOS",
+                    "About the local level, 30 s outage position error, FOS + level over FOS"),
+        _ratio_line(studies, "30 s outage: FOS+level / best AR",
+                    "FOS + level over the best AR / Gauss-Markov model"),
+        _ratio_line(studies, "30 s outage: FOS+level / best AR+level",
+                    "FOS + level over the best AR / Gauss-Markov model about the level"),
     ]
 
 
@@ -297,7 +340,8 @@ def main() -> None:
         f"![ADIS16405 imu1 ay_g, fair protocol]({rel}/study/adis16405_imu1/ay_g/order_fair.png)",
         "", f"**Allan deviation** (fits and figures in `{rel}/allan/`):", "",
         markdown_table(allan), "",
-        f"**Residual loop** (reports in `{rel}/loop/`):", "",
+        f"**Residual loop** (every axis; reports in `{rel}/loop/`), prediction segment:", "",
+        *loop_lines(loops), "",
         markdown_table(loops, digits=3), "",
         "**The effects the issue points to**, checked:", "",
         *named_effects(loop_results, recs, mtig_keep, temp), "",
