@@ -45,9 +45,11 @@ from data_synth.effects import (
 from data_synth.profiles import CHAMBER_LEVELS_C, StepProfile, WarmUp
 from data_synth.record import SynthRecord, compose
 from data_synth.sources import (
+    ARProcess,
     BiasInstability,
     GaussMarkov,
     NonlinearAR,
+    RandomWalk,
     TemperatureWhiteNoise,
     WhiteNoise,
 )
@@ -76,6 +78,9 @@ ARRAY_TYPICAL = (0.068, 0.00029)
 RATE_TABLE_LEVELS = tuple(range(0, 81, 10)) + tuple(range(70, -81, -10)) + tuple(range(-70, 1, 10))
 
 LOOP_RATE, LOOP_DURATION = 100.0, 300.0
+#: The slow-error loop records: 15 minutes, so that 30 % of the record (the prediction
+#: segment, 270 s) holds nine 30 s bias windows.
+SLOW_DURATION = 900.0
 #: Off the FFT grid for the default 300 s (7.3137 * 300 = 2194.11 bins).
 VIBRATION_HZ = 7.3137
 
@@ -440,3 +445,97 @@ def _undeclared_step(duration, step_time_s=None):
 )
 def _temperature_and_vibration():
     return _loop(_base(), *_warmup_temperature(), _temperature_bias(), _vibration(), temp_c="degC")
+
+
+# --- residual-loop records with slow errors (15 minutes) -------------------------------------
+
+
+def _slow_base() -> list:
+    """AR(3) + white noise: the fast part of a gyro error.
+
+    AR(3) ``0.5, -0.2, 0.1`` (stable, a short-memory colouring) driven by 0.2 deg/s,
+    0.24 deg/s stationary; white noise of the CC-300 class, ARW 2.9 deg/sqrt(h)
+    (0.48 deg/s per sample at 100 Hz).  Their 30 s means scatter by about 0.01 deg/s:
+    the slow effects below are several times that.
+    """
+    return [ARProcess((0.5, -0.2, 0.1), 0.2, name="ar3"),
+            WhiteNoise(arw_to_density(2.9), name="white")]
+
+
+def _random_walk() -> RandomWalk:
+    """Bias random walk, K = 0.0063 deg/sqrt(s^3): its Allan deviation, K sqrt(tau/3),
+    reaches 0.02 deg/s at 30 s, twice the noise's 30 s scatter, and it wanders about
+    0.19 deg/s over the record."""
+    return RandomWalk(0.0063, declared=False, name="bias_walk")
+
+
+def _switched_temperature() -> list:
+    """temp_c that keeps moving through the record: a heater switched every 75 s between
+    set points 23-29 C in no order of time (the bias it drives is not a trend), followed
+    with a 15 s thermal lag, and 0.02 C read-out noise; it drives the bias by 0.03 deg/s/C
+    and 0.002 deg/s/C^2.  A level follows such a bias only tens of seconds late; the
+    temperature says at once."""
+    set_points = (25.0, 28.0, 23.0, 27.0, 24.0, 29.0, 26.0, 23.0, 28.0, 25.0, 27.0, 24.0)
+    return [StepProfile(set_points, dwell_s=75.0, lag_s=15.0, channel="temp_c",
+                        name="temp_heater"),
+            WhiteNoise(0.002, channel="temp_c", name="temp_noise"),
+            TemperatureBias((0.0, 0.03, 0.002), t_ref_c=25.0, declared=False,
+                            name="temperature_bias")]
+
+
+def _slow(*sources, **units):
+    return _loop(*_slow_base(), *sources, **units)
+
+
+@_register("slow_clean", SLOW_DURATION, LOOP_RATE,
+           "Control (15 min): gyro_x with only the AR(3) + white base noise")
+def _slow_clean():
+    return _slow()
+
+
+@_register("slow_unrelated_temperature", SLOW_DURATION, LOOP_RATE,
+           "Control (15 min): AR(3) + white noise and a switching temp_c that affects nothing")
+def _slow_unrelated_temperature():
+    return _slow(*_switched_temperature()[:2], temp_c="degC")
+
+
+@_register("slow_random_walk", SLOW_DURATION, LOOP_RATE,
+           "AR(3) + white noise plus an undeclared bias random walk (K 0.0063 deg/s/sqrt(s))")
+def _slow_random_walk():
+    return _slow(_random_walk())
+
+
+@_register("slow_warmup", SLOW_DURATION, LOOP_RATE,
+           "AR(3) + white noise plus an undeclared 0.2 deg/s exponential warm-up "
+           "(time constant tau_s, default 60 s)")
+def _slow_warmup(tau_s: float = 60.0):
+    return _slow(Drift(0.0, 0.2, tau_s, declared=False, name="drift"))
+
+
+@_register("slow_warmup_drift", SLOW_DURATION, LOOP_RATE,
+           "AR(3) + white noise plus an undeclared 300 s, 0.2 deg/s warm-up and a "
+           "1.2 deg/s/h linear drift")
+def _slow_warmup_drift():
+    return _slow(Drift(1.2, 0.2, 300.0, declared=False, name="drift"))
+
+
+@_register("slow_steps", SLOW_DURATION, LOOP_RATE,
+           "AR(3) + white noise plus undeclared bias steps of +0.15 deg/s at 150 s and "
+           "-0.12 deg/s at 350 s")
+def _slow_steps():
+    return _slow(BiasStep((150.0, 350.0), (0.15, -0.12), declared=False, name="bias_step"))
+
+
+@_register("slow_random_walk_temperature", SLOW_DURATION, LOOP_RATE,
+           "AR(3) + white noise plus an undeclared bias random walk and an undeclared "
+           "quadratic bias in a switching temp_c")
+def _slow_random_walk_temperature():
+    return _slow(_random_walk(), *_switched_temperature(), temp_c="degC")
+
+
+@_register("slow_warmup_drift_temperature", SLOW_DURATION, LOOP_RATE,
+           "AR(3) + white noise plus an undeclared warm-up and linear drift and an "
+           "undeclared quadratic bias in a cycling temp_c")
+def _slow_warmup_drift_temperature():
+    return _slow(Drift(1.2, 0.2, 300.0, declared=False, name="drift"), *_switched_temperature(),
+                 temp_c="degC")

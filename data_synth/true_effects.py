@@ -8,7 +8,7 @@ from fosmodel.candidates import OUTPUT, Term
 from fosmodel.effects import Effect
 
 #: Source kinds whose effect is slow: a one-step predictor barely sees them.
-SLOW_KINDS = ("temperature_bias", "drift", "bias_step")
+SLOW_KINDS = ("temperature_bias", "drift", "bias_step", "random_walk")
 
 
 def true_effects(truth: dict) -> list[tuple[Effect, bool]]:
@@ -36,8 +36,10 @@ def true_effects(truth: dict) -> list[tuple[Effect, bool]]:
             effect = Effect("nonlinear")
         elif kind == "drift":
             effect = Effect("drift", form="linear+exponential", tau_s=p["warmup_tau_s"])
-        elif kind == "bias_step":
+        elif kind == "bias_step":  # the first step; the others are the same kind of effect
             effect = Effect("step", time_s=p["steps"][0]["time_s"])
+        elif kind == "random_walk" and s["channel"] == truth["target"]:
+            effect = Effect("level")  # a wandering bias: its optimal predictor is a level
         else:
             continue
         out.append((effect, kind in SLOW_KINDS))

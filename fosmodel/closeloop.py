@@ -15,6 +15,8 @@ model of the output's own lags:
    on the evaluation segment, from the end of the fitting segment and from
    earlier origins; a deterministic drift or step must also beat the level;
 4. of the candidates kept, the one with the largest out-of-sample gain goes in;
+   the others (and the slow ones that wait for the level) are tried again on
+   top of it;
 5. repeat until no test points to an effect that survives, or ``max_effects``.
 
 The prediction segment is never used to decide; it gives the before/after
@@ -282,6 +284,8 @@ def close_loop(
         if not kept:
             break
         effect, family, model, comparison = _choose(kept)
+        # what passed but did not go in is tried again on top of it, firing or not
+        waiting += [k[0] for k in kept if k[0] is not effect]
         steps.append(Step(effect, _new_terms(current, model), _lag_of(effect, model),
                           _tau_of(effect, model), comparison,
                           _metrics(model, y, segments["predict"], config)))

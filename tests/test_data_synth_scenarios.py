@@ -264,3 +264,97 @@ def test_bad_scenarios_and_overrides_raise_input_error():
         make_scenario("gyro_array_8", duration=1.0, rho_arw=-0.5)
     with pytest.raises(InputError):
         make_scenario("clean", duration=-1.0)
+
+
+# -- slow-error loop records (15 minutes) -------------------------------------------------------
+
+SLOW = {
+    "slow_clean": ((), ()),
+    "slow_unrelated_temperature": ((), ("temp_c",)),
+    "slow_random_walk": (("bias_walk",), ()),
+    "slow_warmup": (("drift",), ()),
+    "slow_warmup_drift": (("drift",), ()),
+    "slow_steps": (("bias_step",), ()),
+    "slow_random_walk_temperature": (("bias_walk", "temperature_bias"), ("temp_c",)),
+    "slow_warmup_drift_temperature": (("drift", "temperature_bias"), ("temp_c",)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SLOW))
+def test_slow_scenarios_declare_exactly_their_effects(name):
+    undeclared, extra = SLOW[name]
+    rec = make_scenario(name, seed=0)
+    assert rec.rate == 100.0 and rec.n_samples == 90_000
+    assert list(rec.columns) == ["gyro_x", *extra]
+    assert tuple(s["name"] for s in rec.truth["sources"] if not s["declared"]) == undeclared
+    # the same base draw in every one of them (keyed random streams)
+    base = make_scenario("slow_clean", seed=0).columns["gyro_x"]
+    effect = rec.columns["gyro_x"] - base
+    if not undeclared:
+        np.testing.assert_array_equal(effect, 0.0)
+
+
+def _slow_effect(name, seed=0, **kw):
+    rec = make_scenario(name, seed=seed, **kw)
+    return rec, rec.columns["gyro_x"] - make_scenario("slow_clean", seed=seed).columns["gyro_x"]
+
+
+def test_the_random_walk_wanders_on_a_half_slope_above_the_noise():
+    long = make_scenario("slow_random_walk", seed=3, duration=9000.0)
+    params = sources(long)["bias_walk"]["params"]
+    walk = long.columns["gyro_x"] - make_scenario("slow_clean", seed=3,
+                                                  duration=9000.0).columns["gyro_x"]
+    taus, adev = allantools.oadev(walk, rate=100.0, data_type="freq",
+                                  taus=np.array([10.0, 30.0, 100.0, 300.0]))[:2]
+    slope = np.polyfit(np.log(taus), np.log(adev), 1)[0]
+    assert slope == pytest.approx(0.5, abs=0.1)
+    assert adev[1] == pytest.approx(params["density"] * math.sqrt(30 / 3), rel=0.25)
+    # over the 15 minutes its 30 s means wander well beyond the base noise's
+    rec, walk = _slow_effect("slow_random_walk", seed=3)
+    base = make_scenario("slow_clean", seed=3).columns["gyro_x"]
+    means = [x.reshape(-1, 3000).mean(axis=1).std() for x in (walk, base)]
+    assert means[0] > 3 * means[1]
+
+
+@pytest.mark.parametrize("tau", [20.0, 60.0, 180.0])
+def test_warm_ups_of_several_time_constants(tau):
+    rec, effect = _slow_effect("slow_warmup", tau_s=tau)
+    p = sources(rec)["drift"]["params"]
+    assert p["warmup_tau_s"] == tau and p["slope_per_h"] == 0.0
+    np.testing.assert_allclose(effect, 0.2 * -np.expm1(-rec.time() / tau), atol=1e-12)
+
+
+def test_warm_up_and_linear_drift():
+    rec, effect = _slow_effect("slow_warmup_drift")
+    p = sources(rec)["drift"]["params"]
+    assert (p["slope_per_h"], p["warmup_amplitude"], p["warmup_tau_s"]) == (1.2, 0.2, 300.0)
+    t = rec.time()
+    np.testing.assert_allclose(effect, 1.2 * t / 3600 + 0.2 * -np.expm1(-t / 300), atol=1e-12)
+
+
+def test_steps_sit_in_the_fitting_segment():
+    rec, effect = _slow_effect("slow_steps")
+    steps = sources(rec)["bias_step"]["params"]["steps"]
+    assert [(s["time_s"], s["amplitude"]) for s in steps] == [(150.0, 0.15), (350.0, -0.12)]
+    t = rec.time()
+    np.testing.assert_allclose(effect, 0.15 * (t >= 150) - 0.12 * (t >= 350), atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["slow_random_walk_temperature",
+                                  "slow_warmup_drift_temperature"])
+def test_the_temperature_really_drives_the_bias(name):
+    rec, effect = _slow_effect(name)
+    src = sources(rec)
+    temp = rec.columns["temp_c"]
+    bias = 0.03 * (temp - 25) + 0.002 * (temp - 25) ** 2
+    slow_name = "bias_walk" if "random_walk" in name else "drift"
+    others = effect - bias
+    rng_free = make_scenario(name.replace("_temperature", ""), seed=0).columns["gyro_x"]
+    np.testing.assert_allclose(others, rng_free - make_scenario("slow_clean", seed=0)
+                               .columns["gyro_x"], atol=1e-12)
+    assert src["temperature_bias"]["params"]["coefs"] == [0.0, 0.03, 0.002]
+    assert slow_name in src
+    # the heater moves through 23-29 C with no trend in time
+    means = temp.reshape(12, -1).mean(axis=1)
+    assert 22.9 < temp.min() and temp.max() < 29.1
+    assert abs(np.corrcoef(np.arange(12), means)[0, 1]) < 0.3

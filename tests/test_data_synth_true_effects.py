@@ -17,6 +17,14 @@ from data_synth.true_effects import true_effects
     ("undeclared_step", [("step at 105 s", True)]),
     ("temperature_and_vibration", [("aux temp_c (lags 0-2 and its square)", True),
                                    ("periodic 7.3137 Hz", False)]),
+    ("slow_clean", []),
+    ("slow_random_walk", [("local level", True)]),
+    ("slow_warmup", [("drift (trend and warm-up, tau 60 s)", True)]),
+    ("slow_steps", [("step at 150 s", True)]),
+    ("slow_random_walk_temperature", [("local level", True),
+                                      ("aux temp_c (lags 0-3 and its square)", True)]),
+    ("slow_warmup_drift_temperature", [("drift (trend and warm-up, tau 300 s)", True),
+                                       ("aux temp_c (lags 0-3 and its square)", True)]),
 ])
 def test_true_effects(name, expected):
     truth = make_scenario(name, seed=0).truth
