@@ -402,11 +402,12 @@ class _Judge:
         """The comparison at the fitting segment's end, the gains from the earlier origins,
         and the verdict (``"kept_on"``: the error kind it is kept on, or None).
 
-        The halves of the segment judge every effect but the level: they catch a
-        function of time that runs on, while a level holds still beyond its data,
-        as the model without it does, and its bias gains are the noisiest.  The
-        earlier origins are looked at only for a trial that passes at the end
-        (or with ``all_origins``); otherwise their gains are None.
+        Every effect but the level is judged strictly (:func:`fosmodel.judge.verdict`):
+        the halves of the segment and every earlier origin catch a function of time
+        that runs on, while a level holds still beyond its data, as the model
+        without it does, and its bias gains are the noisiest.  The earlier origins
+        are looked at only for a trial that passes at the end (or with
+        ``all_origins``); otherwise their gains are None.
         """
         alpha, halves = self.config.accept_alpha, effect.kind != "level"
         last = compare(self.current[-1], self._forecasts(trial), alpha)
