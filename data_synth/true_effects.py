@@ -36,8 +36,9 @@ def true_effects(truth: dict) -> list[tuple[Effect, bool]]:
             effect = Effect("nonlinear")
         elif kind == "drift":
             effect = Effect("drift", form="linear+exponential", tau_s=p["warmup_tau_s"])
-        elif kind == "bias_step":  # the first step; the others are the same kind of effect
-            effect = Effect("step", time_s=p["steps"][0]["time_s"])
+        elif kind == "bias_step":  # one effect per step
+            out += [(Effect("step", time_s=step["time_s"]), True) for step in p["steps"][:-1]]
+            effect = Effect("step", time_s=p["steps"][-1]["time_s"])
         elif kind == "random_walk" and s["channel"] == truth["target"]:
             effect = Effect("level")  # a wandering bias: its optimal predictor is a level
         else:

@@ -373,9 +373,11 @@ def outage_metrics(
     if residual.shape != (stop - start,):
         raise InputError(f"residual has shape {residual.shape}, but the segment "
                          f"[{start}, {stop}) has {stop - start} samples")
-    rms_position = None if position is None else float(np.sqrt(np.mean(position**2)))
+    with np.errstate(over="ignore"):  # a diverging run (an unstable model) squares to inf
+        rms_position = None if position is None else float(np.sqrt(np.mean(position**2)))
+        outage_mse = float(np.mean(errors**2))
     return {
-        "outage_mse": float(np.mean(errors**2)),
+        "outage_mse": outage_mse,
         "outage_position_error_m": rms_position,
         "bias_rms": {tau: bias_rms(residual, rate, tau) for tau in taus},
     }

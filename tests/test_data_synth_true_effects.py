@@ -20,7 +20,7 @@ from data_synth.true_effects import true_effects
     ("slow_clean", []),
     ("slow_random_walk", [("local level", True)]),
     ("slow_warmup", [("drift (trend and warm-up, tau 60 s)", True)]),
-    ("slow_steps", [("step at 150 s", True)]),
+    ("slow_steps", [("step at 150 s", True), ("step at 350 s", True)]),
     ("slow_random_walk_temperature", [("local level", True),
                                       ("aux temp_c (lags 0-3 and its square)", True)]),
     ("slow_warmup_drift_temperature", [("drift (trend and warm-up, tau 300 s)", True),
