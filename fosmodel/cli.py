@@ -11,12 +11,10 @@ import contextlib
 import json
 import logging
 import math
-import os
 import re
-import shutil
 import sys
 import traceback
-import uuid
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple, NoReturn
 
@@ -30,7 +28,7 @@ from .fos import STOP_RULES
 from .levels import levels_for
 from .loader import OUTLIER_K, OUTLIER_MODES, Record, load_record, parse_scales
 from .model import FOSModel
-from .output import atomic_write, write_text
+from .output import atomic_write, refuse_overwrite, report_directory, write_text
 
 if TYPE_CHECKING:
     from .harness import StudyPlan, StudyResult
@@ -161,6 +159,7 @@ def _add_loader_options(parser: argparse.ArgumentParser) -> None:
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     out = _out_path(args.out)
+    refuse_overwrite({"--out": out}, {"the record": args.file})
     exog_lags = dict(args.exog or [])
     if args.column in exog_lags:
         raise InputError(f"--exog {args.column}:{exog_lags[args.column]}: the modelled column "
@@ -228,6 +227,7 @@ def _check_model(model: FOSModel, path: str) -> None:
 
 def _cmd_predict(args: argparse.Namespace) -> int:
     out = _out_path(args.out)
+    refuse_overwrite({"--out": out}, {"the record": args.file, "the model": args.model})
     model = _read_model(args.model)
     column = args.column or model.meta_.get("column")
     if not column:
@@ -330,12 +330,14 @@ def _cmd_study(args: argparse.Namespace) -> int:
 
     json_path = _out_path(args.json) if args.json else None
     out = _out_dir(args.out)
+    refuse_overwrite({"--json": json_path}, {f"the record {i + 1}": f
+                                             for i, f in enumerate(args.files)})
     _check_report_names(args.files, args.columns)
     records = [record for path in args.files for record in _study_records(args, path)]
     with _dask_client(args) as client:
         results = run_studies([r.plan for r in records], client=client,
                               progress=sys.stderr.isatty())
-    _write_study_reports(records, results, out, args.title)
+    _write_study_reports(records, results, out, args.title, args.files)
     _print_studies(records, results)
     if json_path:
         write_text(json_path, json.dumps(_studies_json(records, results), indent=1) + "\n")
@@ -355,49 +357,21 @@ def _title(record: _SensorRecord, title: str | None, single: bool) -> str:
 
 
 def _write_study_reports(records: list[_SensorRecord], results: list[StudyResult], out: Path,
-                         title: str | None) -> None:
+                         title: str | None, inputs: list[str]) -> None:
     """One record's report in ``out``; several in a directory each and their best rows.
 
-    Everything is written to a temporary directory beside ``out`` first, then
-    moved into place, so a failure leaves ``out`` as it was.
+    Everything is written to a directory beside ``out`` first, then moved into
+    place, so a failure leaves ``out`` as it was (:func:`report_directory`).
     """
     from .report import write_study, write_tables
 
     single = len(records) == 1
-    tmp = _temp_dir(out)
-    try:
+    with report_directory(out, inputs) as tmp:
         for record, result in zip(records, results):
             write_study(result, tmp if single else tmp / record.name,
                         _title(record, title, single))
         if not single:
             write_tables(_combined_best(records, results), tmp, "best")
-        _publish(tmp, out)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-
-
-def _temp_dir(out: Path) -> Path:
-    """A new hidden directory beside ``out`` (or its nearest existing ancestor)."""
-    base = out.parent
-    while not base.is_dir():
-        base = base.parent
-    tmp = base / f".{out.name}.{uuid.uuid4().hex}.tmp"
-    tmp.mkdir()
-    return tmp
-
-
-def _publish(tmp: Path, out: Path) -> None:
-    """Rename ``tmp`` to ``out``, or move its files into ``out`` if it exists."""
-    if out.is_dir():
-        for item in tmp.iterdir():
-            target = out / item.name
-            if item.is_dir() and target.is_dir():
-                _publish(item, target)
-            else:
-                os.replace(item, target)
-    else:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        os.replace(tmp, out)
 
 
 def _combined_best(records: list[_SensorRecord], results: list[StudyResult]) -> pd.DataFrame:
@@ -454,6 +428,7 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
     json_path = _out_path(args.json) if args.json else None
     model_path = _out_path(args.model) if args.model else None
     out = _out_dir(args.out)
+    refuse_overwrite({"--json": json_path, "--model": model_path}, {"the record": args.file})
     if args.aux is not None and args.column in args.aux:
         raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
                          "residual (its lag 0 is the value predicted)")
@@ -467,7 +442,8 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
     result = close_loop(y, channels, config,
                         progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,
                                                     flush=True))
-    write_loop_report(result, out, args.title or f"{args.column} of {Path(args.file).name}")
+    with report_directory(out, [args.file]) as tmp:
+        write_loop_report(result, tmp, args.title or f"{args.column} of {Path(args.file).name}")
     if model_path:
         meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
                 "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment",
@@ -491,12 +467,14 @@ def _cmd_allan(args: argparse.Namespace) -> int:
 
     json_path = _out_path(args.json) if args.json else None
     out = _out_dir(args.out)
+    refuse_overwrite({"--json": json_path}, {"the record": args.file})
     rec = _load(args, columns=[args.column])
     rec.require_contiguous("the Allan deviation")
     y = rec.column(args.column)
     result = allan_deviation(y, rec.require_rate(), units=args.units, sensor=args.sensor)
     fit = fit_noise(result)
-    write_allan(result, fit, out, args.title or f"{args.column} of {Path(args.file).name}")
+    with report_directory(out, [args.file]) as tmp:
+        write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}")
     print(fit.summary())
     if json_path:
         data = {"source": rec.source, "column": args.column, "allan": result.to_dict(),
@@ -646,10 +624,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """A warning as the command line shows it: one line, like its notes and errors."""
+    return f"fosmodel: warning: {' '.join(str(message).split())}\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    shown, warnings.formatwarning = warnings.formatwarning, _one_line_warning
+    try:
+        return _run(args)
+    finally:
+        warnings.formatwarning = shown
+
+
+def _run(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="fosmodel: %(message)s", stream=sys.stderr)
     try:

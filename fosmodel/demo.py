@@ -23,6 +23,7 @@ import pandas as pd
 from .closeloop import LoopConfig, close_loop
 from .harness import StudyConfig, StudyResult, run_study
 from .loop_report import write_loop_report
+from .output import report_directory
 from .report import paper_table, write_study
 from .samples import load_mpu6050_static
 
@@ -95,8 +96,14 @@ def run_bundled_record(out_dir: Path) -> pd.DataFrame:
 
 
 def run_demo(out_dir: Path) -> dict[str, StudyResult]:
-    """Run both parts and say where everything went."""
-    results = run_paper_records(out_dir)
-    run_bundled_record(out_dir)
+    """Run both parts and say where everything went.
+
+    Everything is written beside ``out_dir`` and moved onto it at the end
+    (:func:`fosmodel.output.report_directory`): an interrupted demo leaves
+    ``out_dir`` as it was.
+    """
+    with report_directory(out_dir) as staging:
+        results = run_paper_records(staging)
+        run_bundled_record(staging)
     print(f"\noutputs written to {out_dir.resolve()}/ (report.md, tables and figures per record)")
     return results

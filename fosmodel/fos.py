@@ -29,6 +29,10 @@ from scipy.linalg import solve_triangular
 
 from .exceptions import InputError
 
+#: Share of the target's mean square below which an MSE reduction is rounding error: on a
+#: noise-free target the residual reaches ~1e-32 of it, and every rule (Korenberg's threshold
+#: is then 0) would take every candidate.
+ROUNDING = 1e-12
 STOP_RULES = ("korenberg", "max_terms", "variance", "mean_square", "aic", "bic", "fpe", "mdl")
 _CRITERIA = ("aic", "bic", "fpe", "mdl")
 
@@ -230,6 +234,8 @@ def _fos_kernel(
     d_rem = corr.diag - means**2  # D(c,c) after the constant (eq. 19)
     scale = corr.diag
     floor = dependence_tol * scale  # a candidate's D(c,c) at or below this is dependent
+    # a reduction below this share of the target's mean square is rounding error, not a term
+    rounding = ROUNDING * corr.y_mean_sq
     n_cand = len(scale)
     cap, cap_reason = n_cand, "exhausted"
     if stop.max_terms is not None and stop.max_terms <= cap:
@@ -276,6 +282,9 @@ def _fos_kernel(
         mse_new = max(mse - q, 0.0)
         if q <= 0.0:
             reason = "no_reduction"
+            break
+        if q <= rounding:  # what is left is rounding error: a noise-free target is fit
+            reason = "rounding"
             break
         if stop.kind == "korenberg" and q <= 4.0 * mse_new / n:
             reason = "korenberg"
@@ -342,6 +351,8 @@ def center(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _as_finite(a: object, name: str, ndim: int) -> np.ndarray:
+    if np.iscomplexobj(a):
+        raise InputError(f"{name} is complex; FOS models real signals")
     arr = np.asarray(a, dtype=float)
     if arr.ndim != ndim:
         raise InputError(f"{name} must be {ndim}-D, got shape {arr.shape}")

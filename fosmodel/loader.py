@@ -34,6 +34,7 @@ import bz2
 import contextlib
 import csv
 import gzip
+import io
 import itertools
 import lzma
 import re
@@ -65,6 +66,11 @@ _OPENERS = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
 _NOT_REAL = {"c": "complex numbers", "M": "dates", "m": "time spans"}  # by numpy dtype kind
 #: Larger values overflow the sums of products the models form (degree 4 and more).
 _MAX_ABS = 1e30
+#: A compressed record may decompress to this many times its size (CSV of sensor readings
+#: compresses 3-20 times; a file of one repeated line, a thousand times), or at least:
+_EXPANSION, _EXPANSION_FLOOR = 100, 64 * 2**20
+#: A time column that stands still over this many rows of a block is no sensor's.
+_STILL_ROWS = 1000
 #: Sample rates outside this range (Hz) are a unit mistake, not a sensor.
 _RATE_RANGE = (1e-6, 1e9)
 #: Rows per block read from a file: a long record is converted block by block.
@@ -284,8 +290,7 @@ def _factor(text: str) -> float | None:
 
 def _header(path: Path) -> tuple[list[str], int, _Preamble]:
     """Column names, the file line of the first data row (0 if rows, not lines), the preamble."""
-    if not path.is_file():
-        raise InputError(f"{path}: no such file")
+    _check_regular(path)
     if path.stat().st_size == 0:
         raise InputError(f"{path}: the file is empty")
     kind = _kind(path)
@@ -295,6 +300,22 @@ def _header(path: Path) -> tuple[list[str], int, _Preamble]:
         return _parquet_file(path).schema_arrow.names, 0, _Preamble(0, [])
     preamble = _find_preamble(path)
     return _csv_names(path, preamble.header_index), preamble.header_index + 2, preamble
+
+
+def _check_regular(path: Path) -> None:
+    """Refuse what is not a regular file: a record is read, and re-read, to its end."""
+    if not path.exists():
+        raise InputError(f"{path}: no such file" + (" (a broken symbolic link)"
+                                                    if path.is_symlink() else ""))
+    if path.is_dir():
+        raise InputError(f"{path}: a directory, not a record")
+    if not path.is_file():
+        kind = ("a FIFO" if path.is_fifo() else "a device" if path.is_char_device()
+                or path.is_block_device() else "a socket" if path.is_socket() else
+                "not a regular file")
+        target = f" ({path.resolve()})" if path.is_symlink() else ""
+        raise InputError(f"{path}{target}: {kind}, not a regular file; fosmodel reads records "
+                         "from files")
 
 
 def _kind(path: Path) -> str:
@@ -332,17 +353,69 @@ def _blocks(path: Path, skip: int, names: list[str],
 
 
 def _convert(blocks: Iterator[pd.DataFrame], src: str, first_line: int) -> dict[str, np.ndarray]:
-    """Concatenate the blocks' columns as finite float64, or an error naming the first bad cell."""
+    """Concatenate the blocks' columns as finite float64, or an error naming the first bad cell.
+
+    The time column is checked block by block (a time that goes backwards, or
+    does not advance over a whole block, fails there), and the memory the
+    columns take is held to :func:`_memory_budget`, so a file far larger than
+    the machine fails early and says how much it would take.
+    """
     parts: dict[str, list[np.ndarray]] = {}
-    offset = 0
+    offset, budget = 0, _memory_budget()
     for block in blocks:
         for c in block.columns:
             parts.setdefault(str(c), []).append(_numeric(block[c], src, str(c), first_line, offset))
+        _check_time_block(parts, src, first_line, offset)
         offset += len(block)
+        held = offset * 8 * len(parts)
+        if held > budget:
+            raise InputError(f"{src}: too large to read: {offset:,} rows of {len(parts)} "
+                             f"column(s) already take {held / 2**30:.1f} GiB as float64, more "
+                             f"than the {budget / 2**30:.1f} GiB this machine has free; read "
+                             "fewer columns (--column) or a shorter stretch")
     data = {name: np.concatenate(p) if len(p) > 1 else p[0] for name, p in parts.items()}
     for name, arr in data.items():
         _check_finite(arr, src, name, first_line)
     return data
+
+
+def _check_time_block(parts: dict[str, list[np.ndarray]], src: str, first_line: int,
+                      offset: int) -> None:
+    """The time column's newest block: it must not go backwards (from the previous block on
+    either), nor stand still over a whole block (no sensor repeats its time that long)."""
+    name = next((c for c in TIME_COLUMNS if c in parts), None)
+    if name is None:
+        return
+    block = parts[name][-1]
+    previous = parts[name][-2][-1:] if len(parts[name]) > 1 else block[:0]
+    time = np.concatenate([previous, block])
+    if not (np.abs(time) <= _MAX_ABS).all():  # the finite and magnitude checks name the cell
+        return
+    dt = np.diff(time)
+    back = np.flatnonzero(dt < 0)
+    start = offset - len(previous)
+    if back.size:
+        i = int(back[0]) + 1
+        raise InputError(f"{src}: column {name!r}, {_where(start + i, first_line)}: time goes "
+                         f"backwards ({float(time[i - 1])!r} then {float(time[i])!r})")
+    if len(block) >= _STILL_ROWS and block[-1] == block[0]:
+        raise InputError(f"{src}: column {name!r}, {_where(offset + 1, first_line)}: time repeats "
+                         f"({float(block[0])!r} then {float(block[1])!r}) and does not advance "
+                         f"over {len(block):,} rows")
+
+
+def _memory_budget() -> int:
+    """Bytes the kept columns may take: most of the machine's free memory (``FOSMODEL_MAX_MEMORY``
+    in bytes sets it)."""
+    import os
+
+    if "FOSMODEL_MAX_MEMORY" in os.environ:
+        return int(float(os.environ["FOSMODEL_MAX_MEMORY"]))
+    try:
+        free = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return 2**62
+    return int(0.6 * free)
 
 
 def _find_preamble(path: Path) -> _Preamble:
@@ -419,9 +492,9 @@ def _csv_blocks(path: Path, skip: int, keep: list[str] | None) -> Iterator[pd.Da
     since the missing field may be any of them.
     """
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _source(path) as source:
             warnings.simplefilter("error", pd.errors.ParserWarning)
-            with pd.read_csv(path, low_memory=False, index_col=False, skiprows=skip,
+            with pd.read_csv(source, low_memory=False, index_col=False, skiprows=skip,
                              chunksize=CHUNK_ROWS, **_CSV_OPTIONS) as reader:
                 first_line = skip + 2
                 for block in reader:
@@ -431,6 +504,40 @@ def _csv_blocks(path: Path, skip: int, keep: list[str] | None) -> Iterator[pd.Da
                     yield block if keep is None else block[keep]
     except Exception as exc:  # noqa: BLE001 - one message for every way a read can fail
         raise _csv_error(path, skip, exc) from None
+
+
+@contextlib.contextmanager
+def _source(path: Path):
+    """The file to parse: its path, or for a compressed file a stream that stops (InputError)
+    once it has given more than ``_EXPANSION`` times the file's size (and ``_EXPANSION_FLOOR``)."""
+    opener = _OPENERS.get(path.suffix.lower())
+    if opener is None:
+        yield path
+        return
+    limit = max(_EXPANSION * path.stat().st_size, _EXPANSION_FLOOR)
+    with opener(path, "rb") as raw:
+        yield _Capped(raw, limit, path)
+
+
+class _Capped(io.RawIOBase):
+    """A binary stream that refuses to give more than ``limit`` bytes."""
+
+    def __init__(self, raw, limit: int, path: Path) -> None:
+        self.raw, self.limit, self.path, self.given = raw, limit, path, 0
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer) -> int:
+        data = self.raw.read(len(buffer))
+        self.given += len(data)
+        if self.given > self.limit:
+            size = self.path.stat().st_size
+            raise InputError(f"{self.path}: decompresses to more than {_EXPANSION} times its size "
+                             f"({size:,} bytes, so far {self.given:,}); fosmodel stops there (a "
+                             "damaged file, or not a record?)")
+        buffer[: len(data)] = data
+        return len(data)
 
 
 def _check_last_field(block: pd.DataFrame, keep: list[str], path: Path, first_line: int) -> None:

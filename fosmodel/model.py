@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import logging
+import warnings
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -45,7 +46,7 @@ from .dynamics import (
     is_stable,
     warn_if_unstable,
 )
-from .exceptions import InputError
+from .exceptions import FitWarning, InputError
 from .fos import StopRule, _DataCorrelations, _fos_kernel, center
 from .freerun import run_many, run_one, split_expansion
 from .levels import (
@@ -62,6 +63,7 @@ from .validation import as_channels, as_signal
 log = logging.getLogger(__name__)
 
 FORMAT = "fosmodel.FOSModel"
+_SAMPLES_PER_WEIGHT = 10  # below this per weight, a fit warns that its weights are rough
 FORMAT_VERSION = 1
 _BYTES_PER_VALUE = 8
 
@@ -215,6 +217,11 @@ class FOSModel(BaseEstimator):
         n0 = spec.lag_window
         log.info("FOS candidate set: %d candidates (L=%d, CP=%d, exog=%s, columns=%d)",
                  n_cand, spec.max_lag, spec.degree, dict(spec.exog_lags), len(spec.columns))
+        runs = _usable(segments, len(y_arr), n0)
+        where = f" in {len(segments)} segments" if segments is not None else ""
+        if not runs:
+            raise InputError(f"record too short: {len(y_arr)} samples{where}, no longer than "
+                             f"the lag window of {n0} samples (the largest lag)")
         if n_cand > self.max_candidates:
             mib = n_cand * max(len(y_arr) - n0, 0) * _BYTES_PER_VALUE / 2**20
             raise InputError(
@@ -222,15 +229,15 @@ class FOSModel(BaseEstimator):
                 f"(as a matrix over this record they would take {mib:,.0f} MiB); "
                 "lower the lag, the degree or the channels, or raise max_candidates"
             )
-        runs = _usable(segments, len(y_arr), n0)
-        needed = (rule.max_terms or 1) + 2
-        if sum(s.stop - s.start - n0 for s in runs) < needed:
+        window = sum(s.stop - s.start - n0 for s in runs)
+        if window < n_cand + 2:
             raise InputError(
-                f"record too short: {len(y_arr)} samples"
-                + (f" in {len(segments)} segments" if segments is not None else "")
-                + f", but the lag window needs {n0} and fitting {rule.max_terms or 1} term(s) "
-                f"needs {needed} more"
-            )
+                f"record too short: {len(y_arr)} samples{where} leave {window} in the fitting "
+                f"window (after the lag window of {n0}) for {n_cand} candidates; FOS needs "
+                f"at least {n_cand + 2} to tell them apart: lower the lag, the degree or the "
+                "channels, or give a longer record")
+        if np.ptp(y_arr) == 0:
+            raise InputError(f"y is constant ({y_arr[0]:g}): there is nothing to model")
         channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
         _refuse_own_input(y_arr, channels)
         signals, offsets = self._centred({OUTPUT: y_arr, **channels}, None)
@@ -263,7 +270,18 @@ class FOSModel(BaseEstimator):
         self.stop_reason_ = res.stop_reason
         self.n_dependent_ = res.n_dependent
         self.target_name_ = getattr(y, "name", None) or OUTPUT
+        if self._thin():
+            warnings.warn(FitWarning(self._thin()), stacklevel=2)
         return self
+
+    def _thin(self) -> str | None:
+        """A note when the fitting window holds few samples per weight, else None."""
+        weights = len(self.terms_) + 1
+        if self.n_samples_ >= _SAMPLES_PER_WEIGHT * weights:
+            return None
+        return (f"only {self.n_samples_} samples for {weights} weights (the constant and "
+                f"{weights - 1} term(s)), fewer than {_SAMPLES_PER_WEIGHT} each: the weights "
+                "are rough; fit a longer record before relying on them")
 
     def _with_levels(self, signals: dict[str, np.ndarray], spec: CandidateSpec):
         """``signals`` (centred, one contiguous run) with the levels of its output added
@@ -613,6 +631,8 @@ class FOSModel(BaseEstimator):
             if self.center else "Terms are products of the raw signals.",
             "Q is the training MSE reduction of each term (FOS eq. 27), in selection order.",
         ]
+        if self._thin():
+            notes.append(self._thin()[0].upper() + self._thin()[1:] + ".")
         if spec.levels:
             notes.append("level@<tau>s is the exponentially weighted mean of the output's past "
                          "(time constant tau); in a free run it follows the model's own output.")

@@ -392,22 +392,6 @@ def test_study_unreachable_scheduler_exit_2(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
-def test_study_output_is_moved_into_an_existing_directory(tmp_path):
-    out, tmp = tmp_path / "out", tmp_path / ".out.tmp"
-    (out / "imu1_gx").mkdir(parents=True)
-    (out / "imu1_gx" / "report.md").write_text("old")
-    (out / "notes.txt").write_text("mine")
-    (tmp / "imu1_gx").mkdir(parents=True)
-    (tmp / "imu1_gx" / "report.md").write_text("new")
-    (tmp / "best.csv").write_text("new")
-    cli._publish(tmp, out)
-    assert (out / "imu1_gx" / "report.md").read_text() == "new"
-    assert (out / "best.csv").read_text() == "new" and (out / "notes.txt").read_text() == "mine"
-    fresh = tmp_path / "new" / "deeper"
-    cli._publish(out, fresh)
-    assert (fresh / "best.csv").exists() and not out.exists()
-
-
 def test_fit_refuses_a_candidate_set_over_max_candidates(record, tmp_path, capsys):
     out = tmp_path / "m.json"
     code, stdout, err = _run(["fit", record, "--column", "gyro_y", "--max-lag", 50, "--degree", 2,

@@ -81,6 +81,31 @@ def _three_d_npy(tmp):
     return ["fit", str(tmp / "rec.npy"), "--column", "c0", "--out", str(tmp / "model.json")]
 
 
+def _bomb(tmp):
+    """A record of one repeated line: a 70 kB file that expands to 70 MB."""
+    data = gzip.compress(b"gx\n" + b"0\n" * 35_000_000, 9)
+    return _fit(tmp, data, "--rate", "100", name="rec.csv.gz")
+
+
+def _still_time(tmp):
+    rows = "".join("0.0,1\n" for _ in range(500_001))
+    return _fit(tmp, gzip.compress(("time,gx\n" + rows).encode(), 9), name="rec.csv.gz")
+
+
+def _device(tmp):
+    (tmp / "rec.csv").symlink_to("/dev/zero")
+    return ["fit", str(tmp / "rec.csv"), "--column", "gx", "--out", str(tmp / "m.json")]
+
+
+def _report_over_input(tmp):
+    """A study written into the record's own directory, where its table would take the
+    record's name."""
+    path = _write(tmp, _record(12000), "study.csv")
+    return ["study", path, "--column", "gx", "--sensor", "gyro", "--units", "deg/s",
+            "--orders", "1", "--degrees", "1", "--methods", "burg", "--protocol", "fair",
+            "--split", "30,20", "--no-levels", "--out", str(tmp)]
+
+
 def _report(command, tmp, path, *extra):
     """``study``, ``close-loop`` or ``allan`` on ``path``, with a report directory."""
     study = ["--sensor", "gyro", "--units", "deg/s"] if command == "study" else []
@@ -121,6 +146,18 @@ BUILDERS = {
     "bad `--rate` or other option value": lambda tmp: _fit(tmp, _record(), "--rate", "-5"),
     "modelled column given as its own input": lambda tmp: _fit(tmp, _record(), "--exog", "gx:1"),
     "record too short for the lag window": lambda tmp: _fit(tmp, _record(), "--max-lag", "100"),
+    "too few samples for the candidates": lambda tmp: _fit(tmp, _record(), "--degree", "2"),
+    "constant record":
+        lambda tmp: _fit(tmp, "time,gx\n" + "".join(f"{k / 100},1\n" for k in range(50))),
+    "a compressed file that expands far": _bomb,
+    "time that does not advance over a block": _still_time,
+    "a device, FIFO or socket as the record": _device,
+    "an output naming a file the command reads":
+        lambda tmp: _fit(tmp, _record())[:-1] + [str(tmp / "rec.csv")],
+    "two outputs naming one file":
+        lambda tmp: _report("close-loop", tmp, _write(tmp, _record(3000)), "--json",
+                            str(tmp / "o.json"), "--model", str(tmp / "o.json")),
+    "a report that would replace an input": _report_over_input,
     "record too short for the model's lag window (`predict`)":
         lambda tmp: _predict(tmp, _record(2), _model(tmp)),
     "record too short for the split": lambda tmp: _report("close-loop", tmp,

@@ -8,6 +8,12 @@ with code 2 (never 1, never a traceback), print exactly one ``fosmodel: error: `
 the file (besides any ``fosmodel: note: `` lines), raise no warning, and leave the output
 directory byte for byte as it was: no new file or directory, pre-existing outputs unchanged.
 Where the damage sits at a known place, the message must name that column and line.
+
+Beyond damage: records where a result would mean nothing (constant, a few samples, noise-free),
+files that are no regular file (a FIFO, a device through a symlink, a directory), compressed
+files that expand far, complex numbers, and outputs that name the input however spelt.  On
+those a command refuses in one line or succeeds; never a traceback, never another exit code,
+never an output where it failed.
 """
 
 import bz2
@@ -16,6 +22,7 @@ import importlib.util
 import io
 import json
 import lzma
+import os
 import warnings
 from pathlib import Path
 
@@ -298,8 +305,29 @@ def _model_json(rng, model):
     ]
 
 
+def _expanding(rng):
+    """Small compressed files of one repeated line that expand far beyond the limit."""
+    out = []
+    for i, (suffix, compress) in enumerate(((".csv.gz", gzip.compress),
+                                            (".csv.bz2", bz2.compress))):
+        line = f"{rng.integers(1, 9)}\n".encode()
+        data = compress(b"gx\n" + line * 35_000_000)
+        out.append((f"expanding-{i}", f"r{suffix}", data, "times its size"))
+    return out
+
+
+def _complex_npy(rng):
+    rows = np.zeros(50, dtype=[("time", "f8"), ("gx", "c16"), ("temp", "f8")])
+    rows["time"], rows["temp"] = np.arange(50) / 100, 20.0
+    rows["gx"] = rng.standard_normal(50) + 1j * rng.standard_normal(50)
+    buf = io.BytesIO()
+    np.save(buf, rows)
+    return [("complex-npy", "r.npy", buf.getvalue(), "complex numbers")]
+
+
 KINDS = [_empty_and_blank, _header_only, _garbage, _non_utf8, _delimiters, _ragged, _non_numeric,
-         _not_finite, _huge, _time_column, _duplicate_names, _compressed, _npy, _parquet]
+         _not_finite, _huge, _time_column, _duplicate_names, _compressed, _npy, _parquet,
+         _expanding, _complex_npy]
 
 
 # --- running the commands ---------------------------------------------------------------------
@@ -492,3 +520,64 @@ def test_predict_on_segments_reports_the_mse_of_the_predicted_samples(tmp_path, 
     resid = pd.read_csv(pred)["residual"].dropna()
     assert len(resid) == len(t) - 2 * 3
     assert f"{len(resid)} samples, MSE {np.mean(resid**2):.6g}" in capsys.readouterr().out
+
+
+# --- records a result would mean nothing on, files that are not files, paths that alias ------
+
+
+def _valid(lines_of_gx, rate=100):
+    return _text(["time,gx,temp"] + [f"{k / rate:.2f},{g!r},{20 + k / 1000:.3f}"
+                                     for k, g in enumerate(lines_of_gx)])
+
+
+SILENT = {  # (file bytes, commands allowed to succeed on it: predict fits nothing)
+    "constant": (_valid([1.0] * 4000), ("predict",)),
+    "tiny": (_valid([0.1, -0.2, 0.3, 0.05]), ("predict",)),
+    "noise-free": (_valid(list(lfilter([1.0], [1.0, -1.2, 0.5], np.r_[1.0, np.zeros(3999)]))),
+                   ("fit", "fit-new", "predict", "study", "close-loop", "allan")),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SILENT))
+def test_every_command_on_a_record_where_a_result_would_mean_nothing(name, work, capsys):
+    """Each command refuses in one line, or succeeds; never a traceback or another exit code,
+    never an output where it failed."""
+    data, may_succeed = SILENT[name]
+    path, _ = _write_case((f"silent-{name}", "r.csv", data, None), work)
+    for command, argv in _commands(path, work / "model.json", work / "out").items():
+        before = _snapshot(work / "out")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            code = cli.main(argv)
+        err = capsys.readouterr().err
+        assert code in (0, 2) and "internal error" not in err, (command, err)
+        if code == 2:
+            assert _snapshot(work / "out") == before, command
+            assert len([e for e in err.splitlines() if e.startswith("fosmodel: error: ")]) == 1
+        else:
+            assert command in may_succeed, (command, err)
+
+
+def test_every_command_refuses_what_is_not_a_regular_file(work, capsys, tmp_path):
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    device = tmp_path / "zero.csv"
+    device.symlink_to("/dev/zero")
+    for path, text in ((fifo, "a FIFO, not a regular file"), (device, "a device"),
+                       (work / "out", "a directory, not a record")):
+        for command, argv in _commands(path, work / "model.json", work / "out").items():
+            line = _run_fails_cleanly(argv, work, capsys)
+            assert text in line, (command, line)
+
+
+def test_no_command_writes_over_its_input_however_named(work, capsys, tmp_path):
+    record = work / "out" / "pred.csv"  # an earlier output given back as the record
+    record.write_bytes(_text(BASE))
+    (tmp_path / "alias.csv").symlink_to(record)
+    try:
+        for alias in (record, tmp_path / "alias.csv", work / "out" / "allan" / ".." / "pred.csv"):
+            argv = ["predict", str(alias), "--model", str(work / "model.json"), "--out",
+                    str(record)]
+            assert "never writes over a file it reads" in _run_fails_cleanly(argv, work, capsys)
+    finally:
+        record.write_text("earlier pred.csv\n")
