@@ -59,6 +59,22 @@ def burg_with_outages(y: np.ndarray, config: LoopConfig) -> None:
     outage_metrics(model, y, config.rate, config.sensor, config.units, slice(half, len(y)))
 
 
+def time_axis(y: np.ndarray, others: dict, config: LoopConfig, repeats: int) -> dict:
+    """Best times of the loop and of the two baselines, round-robin; the loop's last result."""
+    runs = {"loop": lambda: close_loop(y, others, config),
+            "fos": lambda: FOSModel(max_lag=10).fit(y[: len(y) // 2]),
+            "burg": lambda: burg_with_outages(y, config)}
+    best = dict.fromkeys(runs, np.inf)
+    result = None
+    for _ in range(repeats):
+        for what, run in runs.items():
+            t0 = time.perf_counter()
+            out = run()
+            best[what] = min(best[what], time.perf_counter() - t0)
+            result = out if what == "loop" else result
+    return {**best, "result": result}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
@@ -67,23 +83,15 @@ def main() -> None:
     rows = []
     for name, y, others, sensor, units in records():
         config = LoopConfig(rate=100.0, sensor=sensor, units=units)
-        best = {"loop": np.inf, "fos": np.inf, "burg": np.inf}
-        for _ in range(args.repeats):
-            for what, run in (("loop", lambda: close_loop(y, others, config)),
-                              ("fos", lambda: FOSModel(max_lag=10).fit(y[: len(y) // 2])),
-                              ("burg", lambda: burg_with_outages(y, config))):
-                t0 = time.perf_counter()
-                out = run()
-                best[what] = min(best[what], time.perf_counter() - t0)
-                if what == "loop":
-                    result = out
+        best = time_axis(y, others, config, args.repeats)
         rows.append({
             "record": name, "samples": len(y), "loop (s)": best["loop"],
             "under 15 s": "yes" if best["loop"] < TARGET_S else "NO",
             "starting FOS fit (s)": best["fos"], "loop / FOS fit": best["loop"] / best["fos"],
             "Burg AR(10) + outages (s)": best["burg"],
-            "loop / Burg": best["loop"] / best["burg"], "effects kept": len(result.steps),
-            "candidates rejected": len(result.rejected)})
+            "loop / Burg": best["loop"] / best["burg"],
+            "effects kept": len(best["result"].steps),
+            "candidates rejected": len(best["result"].rejected)})
         print(f"{name}: loop {best['loop']:.1f} s", flush=True)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     table = pd.DataFrame(rows).to_string(index=False, float_format=lambda v: f"{v:.3g}")
