@@ -10,16 +10,22 @@ the IEEE Std 952 model (seed 001 section 2.1, seed 004 eq. 4.17)::
     sigma^2(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln 2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2
 
 with quantization ``Q``, angle/velocity random walk ``N``, bias instability
-``B``, rate random walk ``K`` and rate ramp ``R``.  The model is linear in the
-squared coefficients, so it is solved by non-negative least squares on
-``sigma^2``.  An Allan variance estimate with ``edf`` degrees of freedom has
-the relative variance ``2/edf``, so weighting the residual ``model - sigma^2``
-by ``sqrt(edf/2)/model`` is the weighted least squares on the log-log curve to
-first order (``ln a - ln b ~ (a - b)/b``); evaluating the weights at the model
-rather than at the measured point (iteratively re-weighted) keeps points that
-happen to fall low from pulling the fit down.  Standard errors account for
-the strong correlation between overlapping estimates at neighbouring taus;
-terms not resolved from zero are dropped and the rest refitted.
+``B``, rate random walk ``K`` and rate ramp ``R``, plus IEEE Std 952's
+sinusoidal term ``S`` (``S^2 (sin^2(pi f0 tau)/(pi f0 tau))^2``) when the
+record's spectrum holds a clear line at ``f0`` (a vibration or a pump: it
+bends the curve over a decade around ``1/f0``).  The model is linear in the
+squared coefficients; they are fitted to the *logarithm* of the deviation,
+each point weighted by the inverse of its statistical variance ``1/(2 edf)``
+plus a model allowance of :data:`MODEL_ALLOWANCE` squared.  Without the
+allowance the shortest taus, with hundreds of thousands of degrees of
+freedom, decide the fit, and a real sensor's curve, which the five terms
+describe only to some tens of per cent, is missed by a factor of two from
+10 s on.  The first few averaging times are left out when the record's own
+filtering bends the curve there (:func:`fit_noise`).  Standard errors are
+the sandwich of that weighted fit with the true covariance of the estimates:
+their strong correlation between neighbouring taus, plus the misfit the
+model leaves (estimated from the residuals, Paule-Mandel); terms not
+resolved from zero are dropped and the rest refitted.
 :func:`readoff` gives the classic graphical read-offs for comparison,
 :func:`allan_figure` draws the classic plot and :func:`write_allan` writes the
 figure and tables.
@@ -37,7 +43,10 @@ import allantools
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
-from scipy.optimize import nnls
+from scipy.ndimage import median_filter
+from scipy.optimize import brentq, least_squares, nnls
+from scipy.signal import welch
+from scipy.special import digamma
 
 from .exceptions import InputError
 from .metrics import STANDARD_GRAVITY, to_si_scale
@@ -45,8 +54,10 @@ from .report import save_figure, write_tables
 from .summary import Summary
 from .validation import as_signal, did_you_mean
 
-#: The IEEE Std 952 terms, from short to long averaging times.
+#: The IEEE Std 952 noise terms, from short to long averaging times.
 TERMS = ("Q", "N", "B", "K", "R")
+#: With the sinusoid, fitted where the record has a spectral line.
+ALL_TERMS = (*TERMS, "S")
 #: Fewest samples analysed: one decade of averaging times (m = 1 .. MIN_SAMPLES // MIN_CLUSTERS).
 MIN_SAMPLES = 100
 #: Non-overlapping clusters at the longest default tau: 8 Allan differences, edf >= ~7.
@@ -57,8 +68,22 @@ ID_AVERAGES = (100, 1000)
 ONE_SIGMA = allantools.ci.ONE_SIGMA_CI
 #: Allan deviation of flicker noise per unit of bias instability, sqrt(2 ln 2/pi) ~ 0.664.
 FLICKER_FLOOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
-_MAX_PASSES = 50
-_NAMES = {"Q": "quantization", "B": "bias instability", "R": "rate ramp"}
+#: Relative misfit allowed to the IEEE Std 952 sum at each tau, beside the statistical scatter:
+#: real curves bend from the ideal terms by some tens of per cent (temperature cycles, a bias
+#: that is bounded), and no decade of the curve may be given up for another.
+MODEL_ALLOWANCE = 0.3
+#: Rise of the curve's chi-square that keeps an unresolved term in the fit (three sigma of one
+#: parameter).
+CURVE_CHI2 = 9.0
+#: Most leading averaging times (in samples) the sensor's own filtering may bend.
+FILTER_SAMPLES = 10
+#: A spectral line this many times the spectrum's running median is fitted as IEEE Std 952's
+#: sinusoidal term.
+LINE_PROMINENCE = 20.0
+#: A fitted curve off the measured one by more than this factor, beyond the 95 % interval of
+#: the measured value, is reported as a miss.
+MISS_FACTOR = 1.25
+_NAMES = {"Q": "quantization", "B": "bias instability", "R": "rate ramp", "S": "sinusoid"}
 _NAMES_BY_SENSOR = {
     "gyro": {"N": "angle random walk", "K": "rate random walk"},
     "accel": {"N": "velocity random walk", "K": "acceleration random walk"},
@@ -67,9 +92,11 @@ _NAMES_BY_SENSOR = {
 #: Navigation units per term: (factor from deg/s- or m/s^2-based SI-ish units, label).
 _NAV = {
     "gyro": {"Q": (1.0, "deg"), "N": (60.0, "deg/sqrt(h)"), "B": (3600.0, "deg/h"),
-             "K": (3600.0 * 60.0, "deg/h/sqrt(h)"), "R": (3600.0**2, "deg/h^2")},
+             "K": (3600.0 * 60.0, "deg/h/sqrt(h)"), "R": (3600.0**2, "deg/h^2"),
+             "S": (3600.0, "deg/h")},
     "accel": {"Q": (1.0, "m/s"), "N": (60.0, "m/s/sqrt(h)"), "B": (1e3 / STANDARD_GRAVITY, "mg"),
-              "K": (3600.0 * 60.0, "m/s/h/sqrt(h)"), "R": (3600.0**2, "m/s/h^2")},
+              "K": (3600.0 * 60.0, "m/s/h/sqrt(h)"), "R": (3600.0**2, "m/s/h^2"),
+              "S": (1e3 / STANDARD_GRAVITY, "mg")},
 }
 
 
@@ -98,6 +125,9 @@ class AllanResult:
         Samples in the record.
     units, sensor : str or None
         Units of the record and ``"gyro"`` or ``"accel"``, if known.
+    line_hz : float or None
+        Frequency of a clear spectral line in the record (see
+        :func:`spectral_line`), fitted as the sinusoidal term; None if there is none.
     """
 
     taus: np.ndarray
@@ -111,6 +141,7 @@ class AllanResult:
     n_samples: int
     units: str | None = None
     sensor: str | None = None
+    line_hz: float | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """One row per tau: tau, ADEV, its confidence interval, counts, edf and noise type."""
@@ -128,7 +159,7 @@ class AllanResult:
             "sensor": self.sensor, "taus_s": self.taus.tolist(), "adev": self.adev.tolist(),
             "lower": self.lower.tolist(), "upper": self.upper.tolist(),
             "counts": self.counts.tolist(), "edf": self.edf.tolist(),
-            "alpha": self.alpha.tolist(), "confidence": ONE_SIGMA,
+            "alpha": self.alpha.tolist(), "confidence": ONE_SIGMA, "line_hz": self.line_hz,
         }
 
 
@@ -195,7 +226,28 @@ def allan_deviation(
     lower, upper = np.array([allantools.confidence_interval(d, e) for d, e in zip(adev, edf)]).T
     return AllanResult(taus=taus_s, adev=adev, lower=lower, upper=upper,
                        counts=counts.astype(int), edf=edf, alpha=alpha, rate=rate,
-                       n_samples=len(y), units=units, sensor=sensor)
+                       n_samples=len(y), units=units, sensor=sensor,
+                       line_hz=spectral_line(y, rate, 1.0 / taus_s[-1]))
+
+
+def spectral_line(y: np.ndarray, rate: float, fmin_hz: float) -> float | None:
+    """Frequency of the most prominent spectral line above ``fmin_hz``, if it is clear.
+
+    Welch's periodogram (segments of 2^14 samples at most, a few hundred
+    frequencies at least) against its running median over 201 bins; a line
+    is clear at :data:`LINE_PROMINENCE` times that median.  A line bends the
+    Allan deviation over a decade around ``1/f0`` (IEEE Std 952's sinusoidal
+    term), where it would otherwise be read as other noise.
+    """
+    segment = min(2**14, len(y) // 4)
+    if segment < 512:
+        return None
+    freq, power = welch(y - y.mean(), fs=rate, nperseg=segment)
+    floor = median_filter(power, 201, mode="nearest")  # zero padding would make edges "lines"
+    prominence = power / np.maximum(floor, np.finfo(float).tiny)
+    prominence[(freq < fmin_hz) | (np.arange(len(freq)) < 3)] = 0.0
+    best = int(np.argmax(prominence))
+    return float(freq[best]) if prominence[best] >= LINE_PROMINENCE else None
 
 
 def _check_rate(rate: float) -> float:
@@ -269,12 +321,18 @@ def _identify(y: np.ndarray, m: int) -> int:
     return int(np.clip(alpha, -2, 2)) if np.isfinite(alpha) else 0
 
 
-def _basis(taus: np.ndarray, terms: tuple[str, ...]) -> np.ndarray:
-    """Allan variance of each term per unit squared coefficient, one column per term."""
+def _basis(taus: np.ndarray, terms: tuple[str, ...], line_hz: float | None = None) -> np.ndarray:
+    """Allan variance of each term per unit squared coefficient, one column per term.
+
+    The sinusoid ``S`` (amplitude ``S`` at ``line_hz``) has IEEE Std 952's
+    ``(sin^2(pi f0 tau)/(pi f0 tau))^2``.
+    """
     t = np.asarray(taus, dtype=float)
-    columns = {"Q": 3.0 / t**2, "N": 1.0 / t, "B": np.full_like(t, FLICKER_FLOOR**2),
-               "K": t / 3.0, "R": t**2 / 2.0}
-    return np.column_stack([columns[k] for k in terms])
+    columns = {"Q": lambda: 3.0 / t**2, "N": lambda: 1.0 / t,
+               "B": lambda: np.full_like(t, FLICKER_FLOOR**2), "K": lambda: t / 3.0,
+               "R": lambda: t**2 / 2.0,
+               "S": lambda: (np.sin(np.pi * line_hz * t) ** 2 / (np.pi * line_hz * t)) ** 2}
+    return np.column_stack([columns[k]() for k in terms])
 
 
 @dataclass(frozen=True)
@@ -302,9 +360,16 @@ class NoiseFit:
         Upper limits of the terms that are not resolved: the square root of
         their fitted square plus two standard errors of it.
     readoff : dict of str to float
-        Classic graphical read-offs for comparison: ``N`` from the -1/2 line at
-        tau = 1 s, ``K`` from the +1/2 line at tau = 3 s, ``B`` as the minimum
-        deviation / 0.664 (NaN where the curve has no such part).
+        Classic graphical read-offs for comparison (:func:`readoff`): ``N``
+        from the -1/2 line at tau = 1 s, ``K`` from the +1/2 line at tau = 3 s,
+        ``B`` as the minimum deviation / 0.664, and the minimum itself
+        (``min_adev``, the datasheets' "in-run bias stability") at ``min_tau_s``.
+    start : int
+        Index of the shortest averaging time fitted (the ones before it are
+        bent by the sensor's own filtering).
+    misfit : float
+        Relative misfit of the model beyond the statistical scatter (0 when the
+        model explains the curve within it), part of the standard errors.
     """
 
     result: AllanResult
@@ -314,6 +379,26 @@ class NoiseFit:
     resolved: dict[str, bool]
     limits: dict[str, float] = field(default_factory=dict)
     readoff: dict[str, float] = field(default_factory=dict)
+    start: int = 0
+    misfit: float = 0.0
+
+    @property
+    def fitted_taus(self) -> np.ndarray:
+        """The averaging times the fit used."""
+        return self.result.taus[self.start:]
+
+    def misses(self) -> list[tuple[float, float]]:
+        """``(tau, fit/data)`` where the fit misses the measured deviation beyond its 95 %
+        interval and by more than :data:`MISS_FACTOR`, over the fitted taus."""
+        res, out = self.result, []
+        ratio = self.model_adev(res.taus) / res.adev
+        for i in range(self.start, len(res.taus)):
+            lo, hi = allantools.confidence_interval(res.adev[i], res.edf[i], 0.95)
+            model = ratio[i] * res.adev[i]
+            off = max(ratio[i], 1.0 / ratio[i]) > MISS_FACTOR
+            if off and not lo <= model <= hi:
+                out.append((float(res.taus[i]), float(ratio[i])))
+        return out
 
     @property
     def stderr(self) -> dict[str, float]:
@@ -339,12 +424,14 @@ class NoiseFit:
 
     def term_adev(self, term: str, taus: object) -> np.ndarray:
         """Allan deviation of one fitted term at ``taus`` (seconds)."""
-        return self.coefficients[term] * np.sqrt(_basis(np.asarray(taus), (term,))[:, 0])
+        column = _basis(np.asarray(taus), (term,), self.result.line_hz)[:, 0]
+        return self.coefficients[term] * np.sqrt(column)
 
     def model_adev(self, taus: object) -> np.ndarray:
         """Allan deviation of the fitted model (all terms) at ``taus``."""
         squared = np.array([self.coefficients[k] ** 2 for k in self.terms])
-        return np.sqrt(_basis(np.asarray(taus, dtype=float), self.terms) @ squared)
+        basis = _basis(np.asarray(taus, dtype=float), self.terms, self.result.line_hz)
+        return np.sqrt(basis @ squared)
 
     def dominant(self, tau: float) -> str:
         """The resolved term with the largest Allan variance at ``tau`` seconds.
@@ -357,11 +444,12 @@ class NoiseFit:
     def units(self, term: str) -> str:
         """Units of a coefficient in the record's units."""
         u = self.result.units or "units"
-        return {"Q": f"{u}*s", "N": f"{u}*sqrt(s)", "B": u, "K": f"{u}/sqrt(s)",
+        return {"Q": f"{u}*s", "N": f"{u}*sqrt(s)", "B": u, "K": f"{u}/sqrt(s)", "S": u,
                 "R": f"{u}/s"}[term]
 
-    def navigation(self, term: str) -> tuple[float, str] | None:
-        """A coefficient in navigation units (deg/sqrt(h), deg/h, ... or m/s/sqrt(h), mg, ...).
+    def navigation(self, term: str, value: float | None = None) -> tuple[float, str] | None:
+        """A coefficient (or ``value`` of that term) in navigation units (deg/sqrt(h), deg/h,
+        ... or m/s/sqrt(h), mg, ...).
 
         None unless the record's sensor and units are known.
         """
@@ -372,19 +460,22 @@ class NoiseFit:
         if sensor == "gyro":
             base /= to_si_scale("gyro", "deg/s")
         factor, label = _NAV[sensor][term]
-        return self.coefficients[term] * base * factor, label
+        value = self.coefficients[term] if value is None else value
+        return value * base * factor, label
 
     def name(self, term: str) -> str:
         """Name of a term for the record's sensor (e.g. "angle random walk")."""
         return _NAMES.get(term) or _NAMES_BY_SENSOR[self.result.sensor][term]
 
     def summary(self) -> Summary:
-        """Coefficients in record and navigation units, the fit's setup and the read-offs."""
+        """Coefficients in record and navigation units beside the classic read-offs, the
+        fit's setup and what it left out."""
         res = self.result
         info = [("Samples", f"{res.n_samples}"), ("Rate", f"{res.rate:g} Hz"),
                 ("Duration", f"{res.n_samples / res.rate:.6g} s"),
                 ("Averaging times", f"{len(res.taus)}"),
                 ("Tau range", f"{res.taus[0]:.4g}-{res.taus[-1]:.4g} s"),
+                ("Tau range fitted", f"{self.fitted_taus[0]:.4g}-{res.taus[-1]:.4g} s"),
                 ("Units", res.units or "not given"), ("Sensor", res.sensor or "not given"),
                 ("Terms fitted", ",".join(self.terms))]
         return Summary("Allan variance noise coefficients (IEEE Std 952)", info,
@@ -395,40 +486,75 @@ class NoiseFit:
         for k in self.terms:
             ok = self.resolved[k]
             lo, hi = self.interval(k)
+            read = self.readoff.get(k, math.nan)
             row = {"Term": k, "Noise": self.name(k),
                    "Coefficient": self.coefficients[k] if ok else np.nan,
                    "Std. error": self.stderr[k] if ok else np.nan,
                    "Lower 68 %": lo if ok else np.nan, "Upper 68 %": hi if ok else np.nan,
-                   "Units": self.units(k)}
+                   "Upper limit": np.nan if ok else self.limits[k],
+                   "Read-off": read, "Units": self.units(k)}
             nav = self.navigation(k)
             if nav is not None:
-                row.update({"Navigation": nav[0] if ok else np.nan, "Navigation units": nav[1]})
+                row.update({"Navigation": nav[0] if ok else np.nan,
+                            "Navigation upper limit": (np.nan if ok else
+                                                       self.navigation(k, self.limits[k])[0]),
+                            "Navigation read-off": self.navigation(k, read)[0],
+                            "Navigation units": nav[1]})
             row["Resolved"] = "yes" if ok else "no"
             rows.append(row)
         return pd.DataFrame(rows)
 
     def _notes(self) -> list[str]:
-        notes = ["sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi)B^2 + K^2 tau/3 + R^2 tau^2/2, "
-                 "non-negative least squares on sigma^2 weighted by sqrt(edf/2)/model "
-                 "(weighted least squares on the log-log curve to first order)."]
+        res = self.result
+        notes = ["sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi)B^2 + K^2 tau/3 + R^2 tau^2/2"
+                 + (" + S^2 (sin^2(pi f0 tau)/(pi f0 tau))^2" if "S" in self.terms else "")
+                 + ", fitted to ln ADEV with weights 1/(1/(2 edf) + "
+                 f"{MODEL_ALLOWANCE:g}^2) (statistical scatter plus a model allowance)."]
+        if self.start:
+            notes.append(f"Averaging times below {self.fitted_taus[0]:.3g} s left out: the "
+                         "record's own filtering bends the curve there.")
+        if "S" in self.terms:
+            notes.append(f"A spectral line at {res.line_hz:.4g} Hz is fitted as the sinusoid S "
+                         "(its amplitude).")
+        notes.append(f"Misfit beyond the statistical scatter: {self.misfit:.1%} per tau "
+                     "(in the standard errors).")
         missing = [k for k in self.terms if not self.resolved[k]]
         if missing:
             bounds = ", ".join(f"{k} < {self.limits[k]:.3g} {self.units(k)}" for k in missing)
-            notes.append(f"Not resolved (within two standard errors of zero in sigma^2, "
-                         f"dropped and the rest refitted): {bounds}.")
+            notes.append(f"Not resolved (squares within two standard errors of zero; given "
+                         f"by their upper limits, and left out of the curve where it fits as "
+                         f"well without them): {bounds}.")
         reads = {"N": "-1/2 line at tau = 1 s", "K": "+1/2 line at tau = 3 s",
-                 "B": "minimum / 0.664"}
-        shown = [f"{k} = {v:.4g} {self.units(k)} ({reads[k]})"
-                 for k, v in self.readoff.items() if np.isfinite(v)]
+                 "B": f"minimum / 0.664, at tau = {self.readoff.get('min_tau_s', math.nan):.3g} s"}
+        shown = [f"{k} = {self._both(k, self.readoff[k])} ({text})"
+                 for k, text in reads.items() if np.isfinite(self.readoff.get(k, math.nan))]
         if shown:
             notes.append("Classic read-offs: " + "; ".join(shown) + ".")
+        if np.isfinite(self.readoff.get("min_adev", math.nan)):
+            notes.append("Datasheet convention: in-run bias stability = the minimum of the "
+                         f"Allan deviation, {self._both('B', self.readoff['min_adev'])} at "
+                         f"tau = {self.readoff['min_tau_s']:.3g} s.")
+        misses = self.misses()
+        if misses:
+            worst = max(misses, key=lambda m: abs(math.log(m[1])))
+            notes.append(f"WARNING: the fit misses the measured deviation beyond its 95 % "
+                         f"interval at {len(misses)} averaging time(s), worst fit/data "
+                         f"{worst[1]:.2f} at tau = {worst[0]:.3g} s: the IEEE Std 952 terms do "
+                         "not describe the curve there.")
         return notes
+
+    def _both(self, term: str, value: float) -> str:
+        """``value`` of a term in the record's units, and in navigation units if known."""
+        text = f"{value:.4g} {self.units(term)}"
+        nav = self.navigation(term, value)
+        return text if nav is None else f"{text} ({nav[0]:.4g} {nav[1]})"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-serialisable coefficients, errors, intervals, units, read-offs (NaN/inf as null)."""
         nav = {k: self.navigation(k) for k in self.terms}
         return {
-            "model": "sigma^2 = 3Q^2/tau^2 + N^2/tau + (2ln2/pi)B^2 + K^2tau/3 + R^2tau^2/2",
+            "model": "sigma^2 = 3Q^2/tau^2 + N^2/tau + (2ln2/pi)B^2 + K^2tau/3 + R^2tau^2/2"
+                     + (" + S^2(sin^2(pi f0 tau)/(pi f0 tau))^2" if "S" in self.terms else ""),
             "terms": list(self.terms),
             "coefficients": dict(self.coefficients),
             "stderr": {k: _finite(v) for k, v in self.stderr.items()},
@@ -439,6 +565,13 @@ class NoiseFit:
             "navigation": {k: None if v is None else {"value": v[0], "units": v[1]}
                            for k, v in nav.items()},
             "readoff": {k: _finite(v) for k, v in self.readoff.items()},
+            "datasheet": {"in_run_bias_stability": _finite(self.readoff.get("min_adev",
+                                                                            math.nan)),
+                          "tau_s": _finite(self.readoff.get("min_tau_s", math.nan))},
+            "fitted_tau_s": [float(self.fitted_taus[0]), float(self.fitted_taus[-1])],
+            "line_hz": self.result.line_hz, "misfit": self.misfit,
+            "model_allowance": MODEL_ALLOWANCE,
+            "misses": [{"tau_s": t, "fit_over_data": r} for t, r in self.misses()],
         }
 
 
@@ -447,31 +580,50 @@ def _finite(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def fit_noise(result: AllanResult, terms: tuple[str, ...] = TERMS) -> NoiseFit:
+def fit_noise(result: AllanResult, terms: tuple[str, ...] = TERMS, *,
+              min_tau: float | None = None) -> NoiseFit:
     """Fit the IEEE Std 952 noise coefficients to an Allan deviation.
 
-    The squared coefficients come from non-negative weighted least squares
-    (:func:`_weighted_nnls`).  Their standard errors are those of that
-    estimator: the sandwich ``(X'X)^-1 X' C X (X'X)^-1`` of the weighted design
-    ``X``, with ``C`` the correlation between the Allan variance estimates at
-    different taus.  The overlapping estimates are strongly correlated (about
-    0.5 between neighbouring octaves of white noise, 0.9 for a random walk),
-    so treating them as independent would understate the errors two- to
-    three-fold; ``C`` is computed from the fitted model's spectrum
-    (:func:`_correlation`).  A term the fit put at zero gets the error it
-    would have if it were free.  Terms whose square is not two standard errors
-    above zero are dropped, the weakest first, and the rest refitted until
-    every term left is resolved: a superfluous term that the non-negative fit lets soak up
-    scatter would otherwise pull the others down.  The rate ramp is treated as
-    a noise in the weights, as IEEE Std 952 does; for a strictly deterministic
-    ramp its error is overstated.
+    The squared coefficients minimise the weighted squared misfit of the
+    *logarithm* of the deviation, ``sum w (ln model - ln adev)^2`` with
+    ``w = 1/(1/(2 edf) + MODEL_ALLOWANCE^2)``, subject to being non-negative
+    (:func:`_log_fit`).  ``1/(2 edf)`` is the variance of ``ln adev``; the
+    allowance stops the taus with the most degrees of freedom from deciding
+    the fit alone.  When the record's spectrum holds a clear line
+    (``result.line_hz``), IEEE Std 952's sinusoidal term ``S`` is fitted too.
+
+    The shortest averaging times are left out when the record's own
+    filtering (an anti-aliasing or averaging filter in the sensor) bends the
+    curve below the white-noise line there: among the first
+    :data:`FILTER_SAMPLES` samples, the fit starts at the first tau from
+    which its misfit per point is within 1.5 times the best start's
+    (``min_tau`` sets the start instead).
+
+    Standard errors are the sandwich ``(J'WJ)^-1 J'W C W J (J'WJ)^-1`` of
+    that fit, with ``C`` the covariance of the log deviations: the strong
+    correlation between overlapping estimates at neighbouring taus
+    (:func:`_correlation`, from the fitted model's spectrum; treating them as
+    independent would understate the errors two- to three-fold) plus the
+    misfit ``s^2`` the model leaves, estimated from the residuals so that
+    they match their variances on average (Paule and Mandel).  A term the
+    fit put at zero gets the error it would have if it were free.  A term
+    whose square is not two standard errors above zero is not resolved and is
+    reported by its upper limit (its square plus two standard errors).  The
+    weakest such term whose removal leaves the curve as well fitted (its
+    generalised chi-square, with the covariance ``C``, up by less than
+    :data:`CURVE_CHI2`) is dropped and the rest refitted, until none can go:
+    a superfluous term that soaks up scatter pulls the others down, while
+    one that shapes the curve stays in it.
 
     Parameters
     ----------
     result : AllanResult
         From :func:`allan_deviation`.
     terms : tuple of str
-        Terms to fit among ``"Q", "N", "B", "K", "R"``.
+        Terms to fit among ``"Q", "N", "B", "K", "R"`` (and ``"S"``, which is
+        added by itself when the record has a spectral line).
+    min_tau : float, optional
+        Shortest averaging time to fit, in seconds.
 
     Returns
     -------
@@ -480,81 +632,165 @@ def fit_noise(result: AllanResult, terms: tuple[str, ...] = TERMS) -> NoiseFit:
     Raises
     ------
     InputError
-        Unknown or repeated terms, or more terms than averaging times.
+        Unknown or repeated terms, more terms than averaging times, a
+        sinusoid without a line, or a ``min_tau`` that leaves too few taus.
+
+    References
+    ----------
+    IEEE Std 952-1997, Annex C (Allan variance, including the sinusoidal term).
+    R. C. Paule and J. Mandel, "Consensus values and weighting factors",
+    *J. Res. Natl. Bur. Stand.* 87(5), 1982.
     """
-    terms = _check_terms(terms, len(result.taus))
-    kept, squared, se, limits = terms, {}, {}, {}
-    while True:
-        fitted = _fit_terms(result, kept)
-        squared.update({k: c for k, (c, _) in fitted.items()})
-        se.update({k: v for k, (_, v) in fitted.items()})
-        weakest = min(kept, key=lambda k: squared[k] / se[k] if se[k] > 0 else math.inf)
-        if squared[weakest] > 2.0 * se[weakest]:
+    terms = _check_terms(terms, len(result.taus), result.line_hz)
+    start = _start(result, terms, min_tau)
+    kept, (fitted, misfit, resid, cov) = terms, _fit_terms(result, terms, start)
+    squared = {k: c for k, (c, _) in fitted.items()}
+    se = {k: v for k, (_, v) in fitted.items()}
+    while len(kept) > 1:
+        dropped = _drop_one(result, kept, start, squared, se, resid, cov)
+        if dropped is None:
             break
-        limits[weakest] = math.sqrt(squared[weakest] + 2.0 * se[weakest])
-        if len(kept) == 1:
-            break
+        weakest, (fitted, misfit, resid, cov) = dropped
         kept = tuple(k for k in kept if k != weakest)
-        squared[weakest] = 0.0
+        squared.update({k: c for k, (c, _) in fitted.items()}, **{weakest: 0.0})
+        se.update({k: v for k, (_, v) in fitted.items()})
+    limits = {k: math.sqrt(squared[k] + 2.0 * se[k]) for k in terms
+              if not squared[k] > 2.0 * se[k]}
     return NoiseFit(
         result=result, terms=terms,
         coefficients={k: math.sqrt(squared[k]) for k in terms},
         squared_stderr=se, resolved={k: k not in limits for k in terms}, limits=limits,
-        readoff=readoff(result),
+        readoff=readoff(result), start=start, misfit=misfit,
     )
 
 
-def _fit_terms(result: AllanResult, terms: tuple[str, ...]) -> dict[str, tuple[float, float]]:
-    """``{term: (squared coefficient, its standard error)}`` of one weighted NNLS fit."""
-    basis = _basis(result.taus, terms)
-    squared, weights = _weighted_nnls(basis, result.adev**2, result.edf)
-    rho = _correlation(result, dict(zip(terms, squared)))
-    se = _squared_stderr(basis * weights[:, None], rho, squared > 0)
-    return {k: (float(c), float(v)) for k, c, v in zip(terms, squared, se)}
+def _drop_one(result: AllanResult, kept: tuple[str, ...], start: int, squared: dict,
+              se: dict, resid: np.ndarray, cov: np.ndarray) -> tuple[str, tuple] | None:
+    """The weakest unresolved term whose removal leaves the curve as well fitted, with the
+    refit without it; None if every unresolved term shapes the curve."""
+    loose = [k for k in kept if not squared[k] > 2.0 * se[k]]
+    for term in sorted(loose, key=lambda k: squared[k] / se[k] if se[k] > 0 else -math.inf):
+        trial = _fit_terms(result, tuple(k for k in kept if k != term), start)
+        if _chi2(trial[2], cov) - _chi2(resid, cov) < CURVE_CHI2:
+            return term, trial
+    return None
 
 
-def _check_terms(terms: tuple[str, ...], n_taus: int) -> tuple[str, ...]:
+def _check_terms(terms: tuple[str, ...], n_taus: int, line_hz: float | None) -> tuple[str, ...]:
     terms = tuple(terms)
     for k in terms:
-        if k not in TERMS:
-            raise InputError(f"unknown noise term {k!r}{did_you_mean(str(k), TERMS)}; "
-                             f"terms: {', '.join(TERMS)}")
+        if k not in ALL_TERMS:
+            raise InputError(f"unknown noise term {k!r}{did_you_mean(str(k), ALL_TERMS)}; "
+                             f"terms: {', '.join(ALL_TERMS)}")
     if not terms or len(set(terms)) != len(terms):
-        raise InputError(f"terms must be distinct names among {', '.join(TERMS)}, got {terms}")
-    if len(terms) > n_taus:
-        raise InputError(f"{len(terms)} terms cannot be fitted to {n_taus} averaging times")
-    return tuple(k for k in TERMS if k in terms)
+        raise InputError(f"terms must be distinct names among {', '.join(ALL_TERMS)}, got {terms}")
+    if "S" in terms and line_hz is None:
+        raise InputError("the sinusoidal term S needs a spectral line, and the record has none")
+    if line_hz is not None:
+        terms = (*terms, "S")
+    if len(set(terms)) > n_taus:
+        raise InputError(f"{len(set(terms))} terms cannot be fitted to {n_taus} averaging times")
+    return tuple(k for k in ALL_TERMS if k in terms)
 
 
-def _weighted_nnls(
-    basis: np.ndarray, avar: np.ndarray, edf: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Squared coefficients minimising ``sum(edf/2 ((basis @ c - avar)/model)^2)``, ``c >= 0``.
+def _start(result: AllanResult, terms: tuple[str, ...], min_tau: float | None) -> int:
+    """Index of the shortest averaging time fitted (see :func:`fit_noise`)."""
+    last = len(result.taus) - len(terms) - 2
+    if min_tau is not None:
+        start = int(np.searchsorted(result.taus, float(min_tau) * (1.0 - 1e-9)))
+        if start > last:
+            raise InputError(f"min_tau = {min_tau:g} s leaves {len(result.taus) - start} "
+                             f"averaging times for {len(terms)} terms")
+        return start
+    starts = range(min(int(np.sum(result.taus * result.rate <= FILTER_SAMPLES)), last + 1))
+    misfits = []
+    for start in starts:
+        basis = _basis(result.taus[start:], terms, result.line_hz)
+        adev = _unbiased(result.adev[start:], result.edf[start:])
+        squared = _log_fit(basis, adev, result.edf[start:])
+        resid = _log_residual(basis, squared, adev)
+        misfits.append(float(np.mean(_weights(result.edf[start:]) * resid**2)))
+    if not misfits:
+        return 0
+    return int(np.argmax(np.array(misfits) <= 1.5 * min(misfits)))
 
-    Iteratively re-weighted: the first pass divides by the measured Allan
-    variance, later ones by the model of the previous pass, until it settles.
-    Columns are scaled to unit norm for the solver (their magnitudes span many
-    decades of tau).  Returns the squared coefficients and the final weights
-    ``sqrt(edf/2)/model``, the inverse standard deviation of each Allan variance.
+
+def _weights(edf: np.ndarray) -> np.ndarray:
+    """Inverse variance of each log deviation with the model allowance."""
+    return 1.0 / (0.5 / edf + MODEL_ALLOWANCE**2)
+
+
+def _unbiased(adev: np.ndarray, edf: np.ndarray) -> np.ndarray:
+    """``adev`` whose logarithm is unbiased: ``ln`` of a chi-square variance with ``edf``
+    degrees of freedom is low by ``ln(edf/2) - digamma(edf/2)`` on average (about 1/edf),
+    which would pull a log fit down by several per cent where few clusters remain."""
+    return adev * np.exp(0.5 * (np.log(edf / 2.0) - digamma(edf / 2.0)))
+
+
+def _log_residual(basis: np.ndarray, squared: np.ndarray, adev: np.ndarray) -> np.ndarray:
+    model = np.maximum(basis @ squared, np.finfo(float).tiny)
+    return 0.5 * np.log(model) - np.log(adev)
+
+
+def _log_fit(basis: np.ndarray, adev: np.ndarray, edf: np.ndarray) -> np.ndarray:
+    """Non-negative squared coefficients minimising the weighted misfit of ``ln adev``.
+
+    Started from non-negative least squares on the relative misfit of the
+    Allan variance, each column scaled to the size of the data (they span
+    many decades of tau).
     """
-    model, squared = avar, np.zeros(basis.shape[1])
-    for _ in range(_MAX_PASSES):
-        w = np.sqrt(edf / 2.0) / model
-        a = basis * w[:, None]
-        norms = np.linalg.norm(a, axis=0)
-        new = nnls(a / norms, avar * w)[0] / norms
-        settled = np.allclose(new, squared, rtol=1e-8, atol=0.0)
-        squared, model = new, basis @ new
-        if settled:
-            break
-    return squared, np.sqrt(edf / 2.0) / model
+    scale = np.median(adev[:, None] ** 2 / np.maximum(basis, np.finfo(float).tiny), axis=0)
+    design = basis * scale / adev[:, None] ** 2
+    start = np.maximum(nnls(design, np.ones(len(adev)))[0], 1e-6)
+    root_w = np.sqrt(_weights(edf))
+    fitted = least_squares(lambda x: root_w * _log_residual(design, x, np.ones(len(adev))),
+                           start, bounds=(0.0, np.inf), x_scale="jac", xtol=1e-12, ftol=1e-12)
+    return fitted.x * scale
 
 
-def _squared_stderr(x: np.ndarray, rho: np.ndarray, active: np.ndarray) -> np.ndarray:
+def _fit_terms(result: AllanResult, terms: tuple[str, ...],
+               start: int) -> tuple[dict[str, tuple[float, float]], float, np.ndarray, np.ndarray]:
+    """``{term: (squared coefficient, its standard error)}`` of one fit, the misfit, the
+    residuals of ln ADEV and their covariance."""
+    fitted = slice(start, None)
+    adev, edf = result.adev[fitted], result.edf[fitted]
+    basis = _basis(result.taus[fitted], terms, result.line_hz)
+    adev = _unbiased(adev, edf)
+    squared = _log_fit(basis, adev, edf)
+    resid = _log_residual(basis, squared, adev)
+    variance = 0.5 / edf
+    misfit = _paule_mandel(resid, variance, int(np.count_nonzero(squared)))
+    rho = _correlation(result, dict(zip(terms, squared)))[fitted, fitted]
+    cov = np.sqrt(np.outer(variance, variance)) * rho + misfit**2 * np.eye(len(adev))
+    root_w = np.sqrt(_weights(edf))
+    jacobian = 0.5 * basis / np.maximum(basis @ squared, np.finfo(float).tiny)[:, None]
+    se = _squared_stderr(jacobian * root_w[:, None], cov * np.outer(root_w, root_w),
+                         squared > 0)
+    return ({k: (float(c), float(v)) for k, c, v in zip(terms, squared, se)}, misfit, resid,
+            cov)
+
+
+def _chi2(resid: np.ndarray, cov: np.ndarray) -> float:
+    """Generalised chi-square ``r' C^-1 r``; a ridge of 1e-9 of the mean variance keeps the
+    nearly singular correlation of neighbouring taus invertible."""
+    ridge = 1e-9 * float(np.mean(np.diag(cov))) * np.eye(len(cov))
+    return float(resid @ np.linalg.solve(cov + ridge, resid))
+
+
+def _paule_mandel(resid: np.ndarray, variance: np.ndarray, n_params: int) -> float:
+    """Relative misfit ``s`` with ``sum(resid^2/(variance + s^2)) = n - p`` (0 if none needed)."""
+    dof = len(resid) - n_params
+    excess = lambda s: float(np.sum(resid**2 / (variance + s**2))) - dof  # noqa: E731
+    if dof <= 0 or excess(0.0) <= 0:
+        return 0.0
+    return float(brentq(excess, 0.0, 10.0 * float(np.max(np.abs(resid))) + 1.0, xtol=1e-6))
+
+
+def _squared_stderr(x: np.ndarray, cov: np.ndarray, active: np.ndarray) -> np.ndarray:
     """Sandwich standard errors of least squares on the weighted design ``x``.
 
-    The weighted residuals have unit variance and correlation ``rho``.  Each
-    term's error is taken from the fit with the active (non-zero) terms and itself.
+    ``cov`` is the covariance of the weighted residuals.  Each term's error
+    is taken from the fit with the active (non-zero) terms and itself.
     """
     out = np.empty(x.shape[1])
     for k in range(x.shape[1]):
@@ -562,21 +798,21 @@ def _squared_stderr(x: np.ndarray, rho: np.ndarray, active: np.ndarray) -> np.nd
         norms = np.linalg.norm(x[:, cols], axis=0)
         xs = x[:, cols] / norms
         bread = np.linalg.pinv(xs.T @ xs)
-        cov = bread @ xs.T @ rho @ xs @ bread
+        sandwich = bread @ xs.T @ cov @ xs @ bread
         j = int(np.flatnonzero(cols == k)[0])
-        out[k] = math.sqrt(max(cov[j, j], 0.0)) / norms[j]
+        out[k] = math.sqrt(max(sandwich[j, j], 0.0)) / norms[j]
     return out
 
 
 def _spectrum(f: np.ndarray, squared: dict[str, float], rate: float) -> np.ndarray:
-    """Two-sided rate spectrum of the fitted noise terms (the rate ramp is deterministic).
+    """Two-sided rate spectrum of the fitted noise terms (the ramp and the line are left out).
 
     Quantization (white angle error of variance ``Q^2``) and the random walk
     use their sampled forms; white and flicker noise ``N^2`` and ``B^2/(2 pi f)``.
     """
     s2 = np.sin(np.pi * f / rate) ** 2
     shapes = {"Q": 4.0 * s2 * rate, "N": np.ones_like(f), "B": 1.0 / (2.0 * np.pi * f),
-              "K": 1.0 / (4.0 * rate**2 * s2), "R": np.zeros_like(f)}
+              "K": 1.0 / (4.0 * rate**2 * s2), "R": np.zeros_like(f), "S": np.zeros_like(f)}
     return sum(c * shapes[k] for k, c in squared.items())
 
 
@@ -652,30 +888,62 @@ def readoff(result: AllanResult, slope_tol: float = 0.25) -> dict[str, float]:
         line = 10 ** (log_a[i] + nominal * (math.log10(at) - log_t[i]))
         out[term] = line if abs(slope[i] - nominal) <= slope_tol else math.nan
     i = int(np.argmin(result.adev))
-    out["B"] = result.adev[i] / FLICKER_FLOOR if 0 < i < len(result.adev) - 1 else math.nan
+    inside = 0 < i < len(result.adev) - 1
+    out["B"] = result.adev[i] / FLICKER_FLOOR if inside else math.nan
+    out["min_adev"] = float(result.adev[i]) if inside else math.nan
+    out["min_tau_s"] = float(result.taus[i]) if inside else math.nan
     return out
 
 
 def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
-    """Log-log Allan deviation with its 68 % band, each fitted term's line and their sum."""
-    fig = Figure(figsize=(7.5, 5.2), layout="constrained")
-    ax = fig.subplots()
+    """Log-log Allan deviation with its 68 % band, each fitted term's line, their sum and the
+    classic read-offs; below, the fit over the data with the data's 68 % band."""
+    fig = Figure(figsize=(7.5, 6.6), layout="constrained")
+    ax, low = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
     ax.fill_between(result.taus, result.lower, result.upper, color="C0", alpha=0.25,
                     label="68 % confidence interval")
-    ax.loglog(result.taus, result.adev, "o", color="C0", ms=3.5, label="overlapping ADEV")
-    grid = np.geomspace(result.taus[0], result.taus[-1], 200)
+    left_out = slice(0, fit.start)
+    ax.loglog(result.taus[fit.start:], result.adev[fit.start:], "o", color="C0", ms=3.5,
+              label="overlapping ADEV")
+    if fit.start:
+        ax.loglog(result.taus[left_out], result.adev[left_out], "o", mfc="none", color="C0",
+                  ms=3.5, label="left out (the sensor's filtering)")
+    grid = np.geomspace(result.taus[0], result.taus[-1], 400)
     for i, k in enumerate(fit.terms):
         if fit.coefficients[k] > 0:
             ax.loglog(grid, fit.term_adev(k, grid), "--" if fit.resolved[k] else ":",
                       color=f"C{i + 1}", label=_legend(fit, k))
     ax.loglog(grid, fit.model_adev(grid), "-", color="k", lw=1.2, label="fitted sum")
+    _readoff_marks(ax, fit)
     ax.set_ylim(result.lower.min() / 3.0, result.upper.max() * 3.0)
-    ax.set_xlabel(r"averaging time $\tau$ (s)")
     ax.set_ylabel(f"Allan deviation ({result.units or 'units'})")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="small")
+    ax.legend(fontsize="x-small")
     ax.set_title(title)
+    model = fit.model_adev(result.taus)
+    low.fill_between(result.taus, model / result.upper, model / result.lower, color="C0",
+                     alpha=0.25, label="data's 68 % interval")
+    low.semilogx(result.taus, model / result.adev, "o-", color="k", ms=3, lw=0.8,
+                 label="fit / data")
+    low.axhline(1.0, color="0.4", lw=0.8)
+    if fit.start:
+        low.axvspan(result.taus[0], fit.fitted_taus[0], color="0.85", label="left out")
+    low.set_xlabel(r"averaging time $\tau$ (s)")
+    low.set_ylabel("fit / data")
+    low.grid(True, which="both", alpha=0.3)
+    low.legend(fontsize="x-small")
     return fig
+
+
+def _readoff_marks(ax, fit: NoiseFit) -> None:
+    """The classic read-offs as crosses: N at 1 s, K at 3 s, and the minimum (B)."""
+    marks = [("N", 1.0, fit.readoff.get("N", math.nan), "N read-off (-1/2 line at 1 s)"),
+             ("K", 3.0, fit.readoff.get("K", math.nan), "K read-off (+1/2 line at 3 s)"),
+             ("B", fit.readoff.get("min_tau_s", math.nan), fit.readoff.get("min_adev", math.nan),
+              "minimum (in-run bias stability = 0.664 B)")]
+    for _, tau, value, label in marks:
+        if np.isfinite(tau) and np.isfinite(value):
+            ax.plot([tau], [value], "x", color="0.2", ms=8, mew=1.5, label=label)
 
 
 def _legend(fit: NoiseFit, term: str) -> str:

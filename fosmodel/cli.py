@@ -472,10 +472,14 @@ def _cmd_allan(args: argparse.Namespace) -> int:
     rec.require_contiguous("the Allan deviation")
     y = rec.column(args.column)
     result = allan_deviation(y, rec.require_rate(), units=args.units, sensor=args.sensor)
-    fit = fit_noise(result)
+    fit = fit_noise(result, min_tau=args.min_tau)
     with report_directory(out, [args.file]) as tmp:
         write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}")
     print(fit.summary())
+    for tau, ratio in fit.misses()[:1]:
+        print(f"warning: the IEEE Std 952 fit misses the measured Allan deviation beyond its "
+              f"95 % interval at {len(fit.misses())} averaging time(s) (fit/data {ratio:.2f} "
+              f"at tau = {tau:.3g} s first); see the figure's lower panel", file=sys.stderr)
     if json_path:
         data = {"source": rec.source, "column": args.column, "allan": result.to_dict(),
                 "noise": fit.to_dict()}
@@ -607,6 +611,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_loader_options(allan)
     allan.add_argument("--sensor", choices=("accel", "gyro"), help="for navigation units")
     allan.add_argument("--units", help="units of the column (with --sensor)")
+    allan.add_argument("--min-tau", type=_positive_float,
+                       help="shortest averaging time fitted, in s (default: found from the "
+                            "curve, leaving out taus bent by the sensor's own filtering)")
     allan.add_argument("--title", help="title of the figure")
     allan.add_argument("--out", required=True, help="output directory (created)")
     allan.add_argument("--json", help="also write the Allan deviation and coefficients as JSON")

@@ -36,7 +36,8 @@ def main() -> None:
     for term in TERMS:
         lo, hi = fit.interval(term)
         rows.append({"Term": fit.name(term), "Units": fit.units(term),
-                     "True": truth.get(term, 0.0), "Fitted": fit.coefficients[term],
+                     "True": truth.get(term, 0.0),
+                     "Fitted": fit.coefficients[term] if fit.resolved[term] else float("nan"),
                      "68 % interval": "not resolved" if not fit.resolved[term]
                      else f"{lo:.4g} - {hi:.4g}",
                      "Upper limit": fit.limits.get(term, float("nan"))})

@@ -2,13 +2,15 @@
 
 Reads ``../shared/data`` (sources and licences in its README) and skips with a
 clear message where it is absent.  Writes every report, table and figure under
-``studies/results/real/`` and rewrites the README section ``real-data`` from
-this run, so every number there comes from it.
+``studies/results/real/`` and rewrites the README sections ``real-allan`` and
+``real-data`` from this run, so every number there comes from it.
 
 * Model-order study (orders 1-10, FOS CP 1 and 2, every method, both
   protocols, and every method about the local level under the fair protocol)
   on every axis of the six ADIS16405 sessions and of the two MPU-6050 records.
-* Allan deviation and noise coefficients of every axis.
+* Allan deviation and noise coefficients of every axis, beside the classic
+  read-offs and the datasheet's in-run bias stability (``--allan`` runs this
+  part alone, in about a minute).
 * Residual loop on every axis of the six ADIS16405 sessions, of both
   MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped).
 * The effects the issues point to, checked one by one.
@@ -111,11 +113,43 @@ def run_studies(recs) -> tuple[pd.DataFrame, dict]:
 # -- Allan deviation --------------------------------------------------------------------------
 
 
-def _nav(fit, term: str) -> str:
-    value = fit.navigation(term)
-    if value is None or not fit.resolved[term]:
-        return "not resolved"
-    return f"{value[0]:.3g} {value[1]}"
+#: The ADIS16405 datasheet's figures, each in its own convention.
+DATASHEET = [
+    "ADIS16405 datasheet, for comparison: gyro angle random walk 2 deg/sqrt(h) (the -1/2 line "
+    "at 1 s, as N here), in-run bias stability 0.007 deg/s = 25.2 deg/h (the minimum of the "
+    "Allan deviation, as the \"in-run bias stability\" column; B = minimum/0.664 would be "
+    "37.9 deg/h); accelerometer velocity random walk 0.2 m/s/sqrt(h) and in-run bias stability "
+    "0.2 mg (the minimum).",
+]
+
+
+def _value(fit, term: str, value: float | None = None) -> str:
+    """A value in navigation units (the coefficient by default), or its upper limit."""
+    if value is None and not fit.resolved[term]:
+        return "< " + _value(fit, term, fit.limits[term])
+    if value is not None and not np.isfinite(value):
+        return "-"
+    nav = fit.navigation(term, value)
+    return f"{nav[0]:.3g} {nav[1]}" if nav else f"{value:.3g}"
+
+
+def allan_row(name: str, axis: str, res, fit) -> dict:
+    """The fitted coefficients beside the classic read-offs and the datasheet value."""
+    band = (res.taus >= 0.1) & (res.taus <= 1000)
+    ratio = fit.model_adev(res.taus[band]) / res.adev[band]
+    read = fit.readoff
+    return {"Record": name, "Axis": axis, "N fitted": _value(fit, "N"),
+            "N read-off (1 s)": _value(fit, "N", read["N"]), "B fitted": _value(fit, "B"),
+            "B read-off (min/0.664)": _value(fit, "B", read["B"]),
+            "in-run bias stability (min)": (f"{_value(fit, 'B', read['min_adev'])} at "
+                                            f"{read['min_tau_s']:.3g} s"
+                                            if np.isfinite(read["min_adev"]) else "-"),
+            "K fitted": _value(fit, "K"), "K read-off (3 s)": _value(fit, "K", read["K"]),
+            "line (Hz)": f"{res.line_hz:.3g}" if res.line_hz else "-",
+            "fit/data min, 0.1-1000 s": ratio.min(), "fit/data max": ratio.max(),
+            "misses": len(fit.misses()),
+            "B/read-off": (fit.coefficients["B"] / read["B"] if fit.resolved["B"]
+                           and np.isfinite(read["B"]) else np.nan)}
 
 
 def run_allan(recs, mtig: Record) -> pd.DataFrame:
@@ -127,11 +161,39 @@ def run_allan(recs, mtig: Record) -> pd.DataFrame:
             res = allan_deviation(rec.column(axis), rec.rate, sensor=sensor, units=units)
             fit = fit_noise(res)
             write_allan(res, fit, OUT / "allan" / slug(name) / axis, f"{name} {axis}")
-            rows.append({"Record": name, "Axis": axis, "White noise (ARW / VRW)": _nav(fit, "N"),
-                         "Bias instability": _nav(fit, "B"), "Rate random walk": _nav(fit, "K"),
-                         "Quantization": _nav(fit, "Q")})
+            rows.append(allan_row(name, axis, res, fit))
         print(f"allan: {name} done", flush=True)
     return pd.DataFrame(rows)
+
+
+def allan_lines(allan: pd.DataFrame) -> list[str]:
+    """How many ADIS16405 axes the fit follows (the issue's bands), with the exceptions."""
+    adis = allan[allan["Record"].str.startswith("ADIS16405")]
+    low, high = adis["fit/data min, 0.1-1000 s"], adis["fit/data max"]
+    outside = adis[(low < 0.7) | (high > 1.4)]
+    names = ", ".join(f"{r.Record.split()[-1]} {r.Axis} ({low[i]:.3f}-{high[i]:.3f})"
+                      for i, r in outside.iterrows())
+    b_ratio = adis["B/read-off"].dropna()
+    b_off = b_ratio[(b_ratio < 1 / 1.5) | (b_ratio > 1.5)]
+    b_names = ", ".join(f"{adis.loc[i, 'Record'].split()[-1]} {adis.loc[i, 'Axis']} "
+                        f"({v:.2f})" for i, v in b_off.items())
+    return [f"- ADIS16405, fitted curve within 0.7-1.4 times the measured deviation over "
+            f"0.1-1000 s on {len(adis) - len(outside)} of {len(adis)} axes"
+            + (f"; outside: {names}." if names else "."),
+            f"- Fitted B within 1.5 times the read-off min(ADEV)/0.664 on "
+            f"{len(b_ratio) - len(b_off)} of the {len(b_ratio)} ADIS16405 axes whose minimum "
+            f"lies inside the curve (B/read-off {b_ratio.min():.2f}-{b_ratio.max():.2f})"
+            + (f"; outside: {b_names}." if b_names else "."),
+            *[f"- {d}" for d in DATASHEET]]
+
+
+def write_allan_section(allan: pd.DataFrame) -> None:
+    rel = OUT.relative_to(README.parent)
+    allan.to_csv(OUT / "allan.csv", index=False)
+    replace_section("real-allan", "\n".join([
+        f"**Allan deviation** (fits and figures in `{rel}/allan/`; `python "
+        "studies/real_data.py --allan` reruns this part alone):", "",
+        *allan_lines(allan), "", markdown_table(allan, digits=3)]))
 
 
 # -- residual loop ----------------------------------------------------------------------------
@@ -320,13 +382,15 @@ def main() -> None:
     mtig_keep = load_record(DATA / "mtig_contaminated" / "gyro_x.csv.gz", rate=100)
     mtig_clip = load_record(DATA / "mtig_contaminated" / "gyro_x.csv.gz", rate=100,
                             outliers="clip")
+    OUT.mkdir(parents=True, exist_ok=True)
+    write_allan_section(run_allan(recs, mtig_keep))
+    if "--allan" in sys.argv[1:]:
+        print(f"README section real-allan rewritten; results in {OUT}")
+        return
     studies, results = run_studies(recs)
-    allan = run_allan(recs, mtig_keep)
     loops, loop_results = run_loops(recs, mtig_keep, mtig_clip)
     temp = temperature_check(recs["MPU-6050 sunsided"][0])
-    OUT.mkdir(parents=True, exist_ok=True)
-    for frame, stem in ((studies, "studies"), (allan, "allan"), (loops, "loops"),
-                        (temp, "temperature")):
+    for frame, stem in ((studies, "studies"), (loops, "loops"), (temp, "temperature")):
         frame.to_csv(OUT / f"{stem}.csv", index=False)
     example = paper_table(results[("ADIS16405 imu1", "ay_g")])
     rel = OUT.relative_to(README.parent)
@@ -338,9 +402,7 @@ def main() -> None:
         "ADIS16405 imu1 ay_g in the layout of the paper's Table 1 (units g):", "",
         markdown_table(example, digits=3), "",
         f"![ADIS16405 imu1 ay_g, fair protocol]({rel}/study/adis16405_imu1/ay_g/order_fair.png)",
-        "", f"**Allan deviation** (fits and figures in `{rel}/allan/`):", "",
-        markdown_table(allan), "",
-        f"**Residual loop** (every axis; reports in `{rel}/loop/`), prediction segment:", "",
+        "", f"**Residual loop** (every axis; reports in `{rel}/loop/`), prediction segment:", "",
         *loop_lines(loops), "",
         markdown_table(loops, digits=3), "",
         "**The effects the issue points to**, checked:", "",

@@ -319,7 +319,10 @@ def test_summary_figure_and_json():
     assert len(data["allan"]["taus_s"]) == len(result.taus)
     fig = allan_figure(result, fit, "gyro")
     labels = fig.axes[0].get_legend_handles_labels()[1]
-    assert any(label.startswith("N angle random walk = 4.0") for label in labels)
+    arw = fit.navigation("N")[0]
+    assert abs(arw - 4.08) < 3 * fit.stderr["N"] * 60  # 0.068 deg/sqrt(s) is 4.08 deg/sqrt(h)
+    assert f"N angle random walk = {arw:.3g} deg/sqrt(h)" in labels
+    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == "fit / data"
     assert "fitted sum" in labels
     frame = result.to_frame()
     assert list(frame.columns[:4]) == ["tau (s)", "ADEV (deg/s)", "lower 68 %", "upper 68 %"]
