@@ -705,10 +705,7 @@ def _start(result: AllanResult, terms: tuple[str, ...], min_tau: float | None) -
     starts = range(min(int(np.sum(result.taus * result.rate <= FILTER_SAMPLES)), last + 1))
     misfits = []
     for start in starts:
-        basis = _basis(result.taus[start:], terms, result.line_hz)
-        adev = _unbiased(result.adev[start:], result.edf[start:])
-        squared = _log_fit(basis, adev, result.edf[start:])
-        resid = _log_residual(basis, squared, adev)
+        resid = _curve_fit(result, terms, start)[2]
         misfits.append(float(np.mean(_weights(result.edf[start:]) * resid**2)))
     if not misfits:
         return 0
@@ -748,20 +745,26 @@ def _log_fit(basis: np.ndarray, adev: np.ndarray, edf: np.ndarray) -> np.ndarray
     return fitted.x * scale
 
 
+def _curve_fit(result: AllanResult, terms: tuple[str, ...],
+               start: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The basis from ``start`` on, the squared coefficients fitted to the bias-corrected
+    ln ADEV there, and the residuals."""
+    basis = _basis(result.taus[start:], terms, result.line_hz)
+    adev = _unbiased(result.adev[start:], result.edf[start:])
+    squared = _log_fit(basis, adev, result.edf[start:])
+    return basis, squared, _log_residual(basis, squared, adev)
+
+
 def _fit_terms(result: AllanResult, terms: tuple[str, ...],
                start: int) -> tuple[dict[str, tuple[float, float]], float, np.ndarray, np.ndarray]:
     """``{term: (squared coefficient, its standard error)}`` of one fit, the misfit, the
     residuals of ln ADEV and their covariance."""
-    fitted = slice(start, None)
-    adev, edf = result.adev[fitted], result.edf[fitted]
-    basis = _basis(result.taus[fitted], terms, result.line_hz)
-    adev = _unbiased(adev, edf)
-    squared = _log_fit(basis, adev, edf)
-    resid = _log_residual(basis, squared, adev)
+    fitted, edf = slice(start, None), result.edf[start:]
+    basis, squared, resid = _curve_fit(result, terms, start)
     variance = 0.5 / edf
     misfit = _paule_mandel(resid, variance, int(np.count_nonzero(squared)))
     rho = _correlation(result, dict(zip(terms, squared)))[fitted, fitted]
-    cov = np.sqrt(np.outer(variance, variance)) * rho + misfit**2 * np.eye(len(adev))
+    cov = np.sqrt(np.outer(variance, variance)) * rho + misfit**2 * np.eye(len(edf))
     root_w = np.sqrt(_weights(edf))
     jacobian = 0.5 * basis / np.maximum(basis @ squared, np.finfo(float).tiny)[:, None]
     se = _squared_stderr(jacobian * root_w[:, None], cov * np.outer(root_w, root_w),
