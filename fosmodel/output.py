@@ -161,9 +161,9 @@ def report_directory(out: str | os.PathLike[str],
     """
     out = Path(out)
     base = out.parent
-    while not base.is_dir():
+    while not base.is_dir():  # beside out, or in its nearest existing ancestor
         base = base.parent
-    target = base / out.name if base == out.parent else out
+    target = base / out.name
     for item in _stale(target, ".tmpdir"):
         _remove(item)
     tmp = _temporary_name(target, ".tmpdir")

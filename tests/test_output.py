@@ -63,6 +63,16 @@ def test_a_report_is_moved_into_an_existing_directory(tmp_path):
     assert (fresh / "best.csv").exists() and not out.exists()
 
 
+def test_a_report_into_directories_that_do_not_exist_yet(tmp_path):
+    """Staged in the nearest existing ancestor, then moved to the new path."""
+    out = tmp_path / "a" / "b" / "report"
+    with report_directory(out) as tmp:
+        assert tmp.parent == tmp_path
+        (tmp / "report.md").write_text("new")
+    assert (out / "report.md").read_text() == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a"]
+
+
 def test_a_report_that_would_replace_an_input_is_refused_whole(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
