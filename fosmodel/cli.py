@@ -476,9 +476,11 @@ def _cmd_allan(args: argparse.Namespace) -> int:
     with report_directory(out, [args.file]) as tmp:
         write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}")
     print(fit.summary())
-    for tau, ratio in fit.misses()[:1]:
+    misses = fit.misses()
+    if misses:
+        tau, ratio = misses[0]
         print(f"warning: the IEEE Std 952 fit misses the measured Allan deviation beyond its "
-              f"95 % interval at {len(fit.misses())} averaging time(s) (fit/data {ratio:.2f} "
+              f"95 % interval at {len(misses)} averaging time(s) (fit/data {ratio:.2f} "
               f"at tau = {tau:.3g} s first); see the figure's lower panel", file=sys.stderr)
     if json_path:
         data = {"source": rec.source, "column": args.column, "allan": result.to_dict(),

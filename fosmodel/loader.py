@@ -37,6 +37,7 @@ import gzip
 import io
 import itertools
 import lzma
+import os
 import re
 import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
@@ -391,13 +392,8 @@ def _check_time_block(parts: dict[str, list[np.ndarray]], src: str, first_line: 
     time = np.concatenate([previous, block])
     if not (np.abs(time) <= _MAX_ABS).all():  # the finite and magnitude checks name the cell
         return
-    dt = np.diff(time)
-    back = np.flatnonzero(dt < 0)
-    start = offset - len(previous)
-    if back.size:
-        i = int(back[0]) + 1
-        raise InputError(f"{src}: column {name!r}, {_where(start + i, first_line)}: time goes "
-                         f"backwards ({float(time[i - 1])!r} then {float(time[i])!r})")
+    _check_order(time, np.diff(time), src, name, first_line, repeats_allowed=True,
+                 offset=offset - len(previous))
     if len(block) >= _STILL_ROWS and block[-1] == block[0]:
         raise InputError(f"{src}: column {name!r}, {_where(offset + 1, first_line)}: time repeats "
                          f"({float(block[0])!r} then {float(block[1])!r}) and does not advance "
@@ -407,8 +403,6 @@ def _check_time_block(parts: dict[str, list[np.ndarray]], src: str, first_line: 
 def _memory_budget() -> int:
     """Bytes the kept columns may take: most of the machine's free memory (``FOSMODEL_MAX_MEMORY``
     in bytes sets it)."""
-    import os
-
     if "FOSMODEL_MAX_MEMORY" in os.environ:
         return int(float(os.environ["FOSMODEL_MAX_MEMORY"]))
     try:
@@ -855,12 +849,15 @@ def _is_bursty(time: np.ndarray, dt: np.ndarray) -> bool:
     return bool(np.all(np.abs(counts - len(time) / 10) <= 0.25 * len(time) / 10))
 
 
-def _check_order(time, dt, src, name, first_line, *, repeats_allowed: bool) -> None:
+def _check_order(time, dt, src, name, first_line, *, repeats_allowed: bool,
+                 offset: int = 0) -> None:
+    """Time that goes backwards (or repeats, unless allowed); ``offset`` is the sample
+    number of ``time[0]`` in the record."""
     bad = np.flatnonzero(dt < 0 if repeats_allowed else dt <= 0)
     if bad.size:
         i = int(bad[0]) + 1
         kind = "repeats" if dt[bad[0]] == 0 else "goes backwards"
-        raise InputError(f"{src}: column {name!r}, {_where(i, first_line)}: time {kind} "
+        raise InputError(f"{src}: column {name!r}, {_where(offset + i, first_line)}: time {kind} "
                          f"({float(time[i - 1])!r} then {float(time[i])!r})")
 
 

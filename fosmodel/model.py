@@ -270,8 +270,9 @@ class FOSModel(BaseEstimator):
         self.stop_reason_ = res.stop_reason
         self.n_dependent_ = res.n_dependent
         self.target_name_ = getattr(y, "name", None) or OUTPUT
-        if self._thin():
-            warnings.warn(FitWarning(self._thin()), stacklevel=2)
+        thin = self._thin()
+        if thin:
+            warnings.warn(FitWarning(thin), stacklevel=2)
         return self
 
     def _thin(self) -> str | None:
@@ -631,8 +632,9 @@ class FOSModel(BaseEstimator):
             if self.center else "Terms are products of the raw signals.",
             "Q is the training MSE reduction of each term (FOS eq. 27), in selection order.",
         ]
-        if self._thin():
-            notes.append(self._thin()[0].upper() + self._thin()[1:] + ".")
+        thin = self._thin()
+        if thin:
+            notes.append(thin[0].upper() + thin[1:] + ".")
         if spec.levels:
             notes.append("level@<tau>s is the exponentially weighted mean of the output's past "
                          "(time constant tau); in a free run it follows the model's own output.")

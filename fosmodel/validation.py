@@ -27,7 +27,7 @@ def as_signal(values: object, name: str, last: int | None = None) -> np.ndarray:
     InputError
         Not 1-D, not numeric, or holding NaN/inf (the first such sample is named).
     """
-    if np.iscomplexobj(values) or getattr(getattr(values, "dtype", None), "kind", "") == "c":
+    if np.iscomplexobj(values):
         raise InputError(f"{name} is complex; fosmodel models real signals (pass its real part "
                          "or its magnitude if that is what you mean)")
     try:
