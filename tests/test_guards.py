@@ -145,6 +145,22 @@ def test_a_time_that_stands_still_fails_on_the_first_block(tmp_path, capsys):
         load_record(path)
 
 
+def test_a_backward_time_fails_in_its_block_with_its_line(tmp_path, monkeypatch):
+    """Across a block boundary and inside a later block, the line named is the file's."""
+    monkeypatch.setattr("fosmodel.loader.CHUNK_ROWS", 1000)
+    calls = []
+    monkeypatch.setattr("fosmodel.loader._check_finite",
+                        lambda *a, **k: calls.append(a))  # reached only after every block
+    for bad_row in (1000, 2500):  # the first row of block 2, and one inside block 3
+        time = np.arange(5000) / 100.0
+        time[bad_row] = time[bad_row - 1] - 0.5
+        path = tmp_path / f"back{bad_row}.csv"
+        pd.DataFrame({"time": time, "gx": 0.0}).to_csv(path, index=False)
+        with pytest.raises(InputError, match=rf"line {bad_row + 2}: time goes backwards"):
+            load_record(path)
+    assert calls == []
+
+
 def test_devices_fifos_and_directories_are_not_records(tmp_path):
     fifo = tmp_path / "pipe.csv"
     os.mkfifo(fifo)
