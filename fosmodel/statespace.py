@@ -84,8 +84,18 @@ class _ShapingFilter:
                              f"({', '.join(self.state_names)}); got {arr.size}")
         return arr
 
+    def _drive(self, w: object | None) -> np.ndarray:
+        """``G w`` for a driving noise ``w`` of ``r`` entries (a scalar when ``r`` is 1);
+        zero when ``w`` is None."""
+        if w is None:
+            return np.zeros(self.n_states)
+        arr = np.asarray(w, dtype=float).ravel()
+        if arr.shape != (self.G.shape[1],):
+            raise InputError(f"the driving noise has {self.G.shape[1]} entries; got {arr.size}")
+        return self.G @ arr
+
     def predict_measurement(self, x: object) -> float:
-        """The modelled output ``H x + mu`` of the state ``x``."""
+        """The modelled output ``H x + mu`` of the state ``x`` (the first output's)."""
         return float(self.H[0] @ self._state(x)) + self.mu
 
     @property
@@ -148,16 +158,17 @@ class _ShapingFilter:
             by default.
         inputs : array-like of shape (n_steps, n_inputs), optional
             ``u`` of each simulated sample; needed when the filter has inputs.
-        noise : array-like of shape (n_steps,), optional
-            Driving noise ``w`` of each sample; zero by default.
+        noise : array-like of shape (n_steps,) or (n_steps, r), optional
+            Driving noise ``w`` of each sample (one column per column of ``G``); zero by
+            default.
 
         Returns
         -------
         ndarray of shape (n_steps,)
-            The output ``y`` of the simulated samples.
+            The output ``y = H x + mu`` of the simulated samples (the first output's).
         """
         x = np.zeros(self.n_states) if x0 is None else self._state(x0)
-        w = np.zeros(n_steps) if noise is None else as_signal(noise, "noise")
+        w = np.zeros((n_steps, self.G.shape[1])) if noise is None else self._noise(noise)
         u = np.zeros((n_steps, 0)) if inputs is None else np.asarray(inputs, dtype=float)
         if len(w) != n_steps or u.shape[0] != n_steps:
             raise InputError(f"noise and inputs need {n_steps} rows each, got {len(w)} and "
@@ -165,8 +176,19 @@ class _ShapingFilter:
         out = np.empty(n_steps)
         for k in range(n_steps):
             x = self.step(x, u[k] if self.n_inputs else None, w[k])
-            out[k] = x[0]
+            out[k] = self.H[0] @ x
         return out + self.mu
+
+    def _noise(self, noise: object) -> np.ndarray:
+        """Driving noise as rows of ``r`` entries: a signal when ``r`` is 1, else a matrix."""
+        r = self.G.shape[1]
+        if r == 1:
+            return as_signal(noise, "noise")[:, None]
+        arr = np.asarray(noise, dtype=float)
+        if arr.ndim != 2 or arr.shape[1] != r or not np.isfinite(arr).all():
+            raise InputError(f"noise must be a finite (n_steps, {r}) array, got shape "
+                             f"{arr.shape}")
+        return arr
 
     def _common_dict(self) -> dict:
         return {
@@ -184,14 +206,16 @@ class StateSpace(_ShapingFilter):
     ----------
     Phi : ndarray of shape (p, p)
         Companion matrix: the AR weights in the first row, ones below the diagonal.
-    G : ndarray of shape (p, 1)
-        Noise input ``[1, 0, ..., 0]'``.
+    G : ndarray of shape (p, r)
+        Noise input: ``[1, 0, ..., 0]'`` (``r = 1``) for the fitted models;
+        :mod:`fosmodel.allan_statespace` drives each state by its own noise.
     B : ndarray of shape (p, m)
         Input matrix (first row only); ``m = 0`` for AR and Gauss-Markov models.
-    H : ndarray of shape (1, p)
-        ``[1, 0, ..., 0]``: the output deviation is the first state.
-    Q : ndarray of shape (1, 1)
-        Variance of the driving noise ``w`` (the model's innovation variance).
+    H : ndarray of shape (d, p)
+        ``[1, 0, ..., 0]`` (``d = 1``): the output deviation is the first state; a sum of
+        states, one row per axis, in :mod:`fosmodel.allan_statespace`.
+    Q : ndarray of shape (r, r)
+        Covariance of the driving noise ``w`` (the fitted model's innovation variance).
     mu : float
         Mean of the output; the state holds deviations from it.
     state_names, input_names : tuple of str
@@ -201,9 +225,10 @@ class StateSpace(_ShapingFilter):
     Phi: np.ndarray
     B: np.ndarray
 
-    def step(self, x: object, u: object | None = None, w: float = 0.0) -> np.ndarray:
-        """The next state ``Phi x + B u + G w`` (``u`` may be omitted without inputs)."""
-        return self.Phi @ self._state(x) + self.B @ self._inputs(u) + self.G[:, 0] * w
+    def step(self, x: object, u: object | None = None, w: object | None = None) -> np.ndarray:
+        """The next state ``Phi x + B u + G w`` (``u`` may be omitted without inputs; ``w``
+        has one entry per column of ``G``, zero by default)."""
+        return self.Phi @ self._state(x) + self.B @ self._inputs(u) + self._drive(w)
 
     def stationary_covariance(self) -> np.ndarray:
         """``P`` with ``P = Phi P Phi' + G Q G'``: the state covariance of the stationary process.
@@ -277,9 +302,9 @@ class NonlinearStateSpace(_ShapingFilter):
         _level_rows(jac, p, self.level_gains)
         return jac
 
-    def step(self, x: object, u: object | None = None, w: float = 0.0) -> np.ndarray:
-        """The next state ``f(x, u) + G w``."""
-        return self.f(x, u) + self.G[:, 0] * w
+    def step(self, x: object, u: object | None = None, w: object | None = None) -> np.ndarray:
+        """The next state ``f(x, u) + G w`` (``w`` zero by default)."""
+        return self.f(x, u) + self._drive(w)
 
     def to_dict(self) -> dict:
         """JSON-serialisable terms, offsets, matrices and names."""
@@ -470,7 +495,9 @@ def position_velocity_error_model(error: StateSpace, dt: float) -> StateSpace:
     Parameters
     ----------
     error : StateSpace
-        The accelerometer error model (from :func:`to_state_space`).
+        The accelerometer error model (from :func:`to_state_space`, or
+        :func:`fosmodel.allan_statespace.allan_state_space`); its first output ``H[0] x``
+        drives the velocity.
     dt : float
         Sampling interval in seconds.
 
@@ -485,7 +512,7 @@ def position_velocity_error_model(error: StateSpace, dt: float) -> StateSpace:
     phi[:2, :2] = [[1.0, dt], [0.0, 1.0]]
     phi[1, 2:] = dt * error.H[0]
     phi[2:, 2:] = error.Phi
-    pad = np.zeros((2, 1))
+    pad = np.zeros((2, error.G.shape[1]))
     return StateSpace(
         Phi=phi, B=np.vstack([np.zeros((2, error.n_inputs)), error.B]),
         G=np.vstack([pad, error.G]), H=np.eye(1, p + 2), Q=error.Q.copy(), mu=0.0,

@@ -233,6 +233,28 @@ def test_position_velocity_augmentation_is_seed_000_eq_5_7():
     assert system.state_names[:3] == ("dp", "dv", "da y[n]") and system.B.shape == (6, 0)
 
 
+def test_a_vector_driving_noise_enters_through_every_column_of_g():
+    """One noise per column of G, and an output that sums states (the Allan models' form)."""
+    ss = StateSpace(Phi=np.diag([0.5, 1.0]), B=np.zeros((2, 0)), G=np.array([[1.0, 0.0],
+                    [0.5, 2.0]]), H=np.ones((1, 2)), Q=np.diag([0.1, 0.2]), mu=3.0,
+                    state_names=("a", "b"), input_names=())
+    np.testing.assert_allclose(ss.step([1.0, 1.0], w=[1.0, 2.0]), [1.5, 5.5])
+    w = np.random.default_rng(8).standard_normal((20, 2))
+    x, expected = np.zeros(2), []
+    for wk in w:
+        x = ss.Phi @ x + ss.G @ wk
+        expected.append(x.sum() + 3.0)
+    np.testing.assert_allclose(ss.simulate(20, noise=w), expected, rtol=1e-14)
+    with pytest.raises(InputError, match="driving noise has 2 entries; got 1"):
+        ss.step([0.0, 0.0], w=1.0)
+    with pytest.raises(InputError, match=r"noise must be a finite \(n_steps, 2\) array"):
+        ss.simulate(3, noise=np.zeros(3))
+    system = position_velocity_error_model(ss, 0.1)
+    np.testing.assert_array_equal(system.G, np.vstack([np.zeros((2, 2)), ss.G]))
+    np.testing.assert_array_equal(system.Phi[1, 2:], [0.1, 0.1])
+    np.testing.assert_array_equal(system.Q, ss.Q)
+
+
 def test_to_dict_is_json_and_complete():
     lin = to_state_space(FOSModel(max_lag=3).fit(AR2)).to_dict()
     non = to_nonlinear_state_space(_fitted_nonlinear()[0]).to_dict()
