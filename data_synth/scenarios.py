@@ -243,6 +243,42 @@ def _gyro_array_8(units="deg/s", rho_arw=0.0, rho_rrw=0.0, typical=False):
     )
 
 
+# --- a static six-axis IMU ------------------------------------------------------------------
+
+#: Per axis: gyro ARW (deg/sqrt(h)) and accelerometer VRW (m/s/sqrt(h)) around the ADIS16405
+#: datasheet's 2 and 0.2, a little apart so that the axes differ (design choice).
+IMU_GYRO_ARW = {"gx_dps": 2.0, "gy_dps": 2.2, "gz_dps": 1.9}
+IMU_ACCEL_VRW = {"ax_mps2": 0.20, "ay_mps2": 0.22, "az_mps2": 0.25}
+#: Bias instability B: the datasheet's in-run stability (0.007 deg/s, 0.2 mg) is the Allan
+#: floor, 0.664 B.  Rate random walk K: about what the ADIS16405 sessions show (150 deg/h/sqrt(h)
+#: = 7e-4 deg/s/sqrt(s); 90 m/s/h/sqrt(h) = 4.2e-4 m/s^2/sqrt(s)).
+IMU_GYRO_B, IMU_GYRO_K = 0.007 / 0.664, 7e-4
+IMU_ACCEL_B, IMU_ACCEL_K = mg_to_mps2(0.2) / 0.664, 4.2e-4
+
+
+@_register(
+    "static_imu",
+    3600.0,
+    100.0,
+    "Static six-axis IMU (gx_dps..gz_dps in deg/s, ax_mps2..az_mps2 in m/s^2), ADIS16405-like: "
+    "white noise, bias instability and rate random walk per axis",
+)
+def _static_imu():
+    sources = []
+    for column, arw in IMU_GYRO_ARW.items():
+        sources += [WhiteNoise(arw_to_density(arw), channel=column, name=f"{column}_white"),
+                    BiasInstability(IMU_GYRO_B, 0.1, 3000.0, channel=column,
+                                    name=f"{column}_bias_instability"),
+                    RandomWalk(IMU_GYRO_K, channel=column, name=f"{column}_random_walk")]
+    for column, vrw in IMU_ACCEL_VRW.items():
+        sources += [WhiteNoise(vrw_to_density(vrw), channel=column, name=f"{column}_white"),
+                    BiasInstability(IMU_ACCEL_B, 0.1, 3000.0, channel=column,
+                                    name=f"{column}_bias_instability"),
+                    RandomWalk(IMU_ACCEL_K, channel=column, name=f"{column}_random_walk")]
+    units = {**{c: "deg/s" for c in IMU_GYRO_ARW}, **{c: ACCEL_UNIT for c in IMU_ACCEL_VRW}}
+    return dict(sources=sources, target="gx_dps", units="deg/s", column_units=units)
+
+
 # --- temperature chamber (seed 001) and rate table (seed 000) ------------------------------
 
 

@@ -463,6 +463,11 @@ def _cmd_close_loop(args: argparse.Namespace) -> int:
 
 
 def _cmd_allan(args: argparse.Namespace) -> int:
+    if args.columns:
+        return _cmd_allan_axes(args)
+    if args.gyro_units or args.accel_units:
+        raise InputError("--gyro-units and --accel-units go with --columns; give --sensor and "
+                         "--units with --column")
     from .allan import allan_deviation, fit_noise, write_allan
 
     json_path = _out_path(args.json) if args.json else None
@@ -487,6 +492,38 @@ def _cmd_allan(args: argparse.Namespace) -> int:
                 "noise": fit.to_dict()}
         write_text(json_path, json.dumps(data, indent=1) + "\n")
     print(f"Allan variance report written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else ""))
+    return 0
+
+
+def _cmd_allan_axes(args: argparse.Namespace) -> int:
+    from .imu_noise import imu_noise, resolve_axes, write_imu_noise
+
+    if args.sensor or args.units:
+        raise InputError("--sensor and --units go with --column; with --columns give "
+                         "COLUMN:SENSOR:UNITS or --gyro-units/--accel-units")
+    json_path = _out_path(args.json) if args.json else None
+    out = _out_dir(args.out)
+    refuse_overwrite({"--json": json_path}, {"the record": args.file})
+    units = {s: u for s, u in (("gyro", args.gyro_units), ("accel", args.accel_units)) if u}
+    axes = resolve_axes(args.columns, units)
+    rec = _load(args, columns=[a.column for a in axes])
+    rec.require_contiguous("the Allan deviation")
+    for axis in axes:
+        print(f"fosmodel: {axis.describe()}", file=sys.stderr)
+    noise = imu_noise({a.column: rec.column(a.column) for a in axes}, axes, rec.require_rate(),
+                      rec.source, min_tau=args.min_tau)
+    with report_directory(out, [args.file]) as tmp:
+        write_imu_noise(noise, tmp, args.title or Path(args.file).name)
+    print(noise.summary())
+    for a in noise.axes:
+        if a.fit.misses():
+            print(f"warning: {a.axis.column}: the IEEE Std 952 fit misses the measured Allan "
+                  "deviation beyond its 95 % interval; see its figure's lower panel",
+                  file=sys.stderr)
+    if json_path:
+        write_text(json_path, json.dumps(noise.to_dict(), indent=1) + "\n")
+    print(f"Allan noise report of {len(axes)} axes written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else ""))
     return 0
 
@@ -609,10 +646,20 @@ def build_parser() -> argparse.ArgumentParser:
     allan = sub.add_parser("allan", help="Allan deviation with confidence intervals and the "
                            "IEEE Std 952 noise coefficients")
     allan.add_argument("file", help="CSV, .npy or .parquet record")
-    allan.add_argument("--column", required=True, help="column to analyse (a rate signal)")
+    which = allan.add_mutually_exclusive_group(required=True)
+    which.add_argument("--column", help="column to analyse (a rate signal)")
+    which.add_argument("--columns", type=_name_list, metavar="COL[:SENSOR:UNITS],...",
+                       help="several axes in one run, e.g. gx,gy,gz,ax,ay,az: one table, one "
+                            "figure per sensor, Kalibr/MATLAB/JSON exports; the sensor and "
+                            "units come from the names (gx_dps, acc_y_mps2) where not given")
     _add_loader_options(allan)
-    allan.add_argument("--sensor", choices=("accel", "gyro"), help="for navigation units")
-    allan.add_argument("--units", help="units of the column (with --sensor)")
+    allan.add_argument("--sensor", choices=("accel", "gyro"),
+                       help="sensor of --column, for navigation units")
+    allan.add_argument("--units", help="units of --column (with --sensor)")
+    allan.add_argument("--gyro-units", metavar="UNITS",
+                       help="units of the gyro columns of --columns (rad/s, deg/s, deg/h)")
+    allan.add_argument("--accel-units", metavar="UNITS",
+                       help="units of the accelerometer columns of --columns (m/s^2, g, mg)")
     allan.add_argument("--min-tau", type=_positive_float,
                        help="shortest averaging time fitted, in s (default: found from the "
                             "curve, leaving out taus bent by the sensor's own filtering)")
