@@ -9,8 +9,9 @@ clear message where it is absent.  Writes every report, table and figure under
   protocols, and every method about the local level under the fair protocol)
   on every axis of the six ADIS16405 sessions and of the two MPU-6050 records.
 * Allan deviation and noise coefficients of every axis, beside the classic
-  read-offs and the datasheet's in-run bias stability (``--allan`` runs this
-  part alone, in about a minute).
+  read-offs and the datasheet's in-run bias stability, one run per record
+  with its Kalibr, MATLAB and JSON exports (``--allan`` runs this part alone,
+  in about a minute).
 * Residual loop on every axis of the six ADIS16405 sessions, of both
   MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped).
 * The effects the issues point to, checked one by one.
@@ -27,11 +28,11 @@ import numpy as np
 import pandas as pd
 from readme_section import README, replace_section
 
-from fosmodel.allan import allan_deviation, fit_noise, write_allan
 from fosmodel.closeloop import LoopConfig, LoopResult, close_loop, score_family
 from fosmodel.diagnose import least_squares_spectrum
 from fosmodel.effects import CandidateFamily, Effect
 from fosmodel.harness import StudyConfig, StudyResult, run_study
+from fosmodel.imu_noise import Axis, imu_noise, write_imu_noise
 from fosmodel.loader import Record, load_record
 from fosmodel.loop_report import evaluation_text, write_loop_report
 from fosmodel.report import paper_table, write_study
@@ -153,15 +154,16 @@ def allan_row(name: str, axis: str, res, fit) -> dict:
 
 
 def run_allan(recs, mtig: Record) -> pd.DataFrame:
+    """Every record's axes in one Allan run each (table, figures, Kalibr/MATLAB/JSON files)."""
     rows = []
     items = [(name, rec, axes) for name, (rec, axes) in recs.items()]
     items.append(("MTi-G", mtig, {"gyro_x": ("gyro", "rad/s")}))
-    for name, rec, axes in items:
-        for axis, (sensor, units) in axes.items():
-            res = allan_deviation(rec.column(axis), rec.rate, sensor=sensor, units=units)
-            fit = fit_noise(res)
-            write_allan(res, fit, OUT / "allan" / slug(name) / axis, f"{name} {axis}")
-            rows.append(allan_row(name, axis, res, fit))
+    for name, rec, units in items:
+        axes = [Axis(column, sensor, unit, "given") for column, (sensor, unit) in units.items()]
+        noise = imu_noise({a.column: rec.column(a.column) for a in axes}, axes, rec.rate,
+                          rec.source)
+        write_imu_noise(noise, OUT / "allan" / slug(name), name)
+        rows += [allan_row(name, a.axis.column, a.result, a.fit) for a in noise.axes]
         print(f"allan: {name} done", flush=True)
     return pd.DataFrame(rows)
 
@@ -193,7 +195,11 @@ def write_allan_section(allan: pd.DataFrame) -> None:
     replace_section("real-allan", "\n".join([
         f"**Allan deviation** (fits and figures in `{rel}/allan/`; `python "
         "studies/real_data.py --allan` reruns this part alone):", "",
-        *allan_lines(allan), "", markdown_table(allan, digits=3)]))
+        *allan_lines(allan), "", markdown_table(allan, digits=3), "",
+        f"The Kalibr `imu.yaml` the same run writes for ADIS16405 imu1 (`{rel}/allan/"
+        "adis16405_imu1/imu.yaml`; beside it `imu_params.m` for MATLAB and `imu_noise.json`):",
+        "", "```yaml", (OUT / "allan" / "adis16405_imu1" / "imu.yaml").read_text().strip(),
+        "```"]))
 
 
 # -- residual loop ----------------------------------------------------------------------------

@@ -1,0 +1,13 @@
+% IMU noise from the Allan deviation of imu4.csv.gz by fosmodel 0.1.0.
+% NoiseDensity = N, BiasInstability = B (floor / 0.664), RandomWalk = K; one value per axis in the order given,
+% or the largest over the axes when a sensor has not exactly three. Upper limits (terms not resolved) are marked.
+% gyro: gx_dps, gy_dps, gz_dps
+%   RandomWalk: upper limit on gx_dps, gy_dps, gz_dps
+gyro = gyroparams('NoiseDensity', [6.998850e-04 7.381094e-04 6.601831e-04], ...
+    'BiasInstability', [2.029514e-04 2.169591e-04 1.983482e-04], ...
+    'RandomWalk', [1.183156e-05 1.288346e-05 1.466382e-05]);
+% accel: ax_g, ay_g, az_g
+accel = accelparams('NoiseDensity', [3.931561e-03 3.375641e-03 4.613331e-03], ...
+    'BiasInstability', [4.454445e-03 2.710208e-03 2.621017e-03], ...
+    'RandomWalk', [8.064538e-04 7.026758e-04 4.283229e-04]);
+imu = imuSensor('accel-gyro', 'SampleRate', 100, 'Gyroscope', gyro, 'Accelerometer', accel);

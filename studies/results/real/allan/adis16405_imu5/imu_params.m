@@ -1,0 +1,13 @@
+% IMU noise from the Allan deviation of imu5.csv.gz by fosmodel 0.1.0.
+% NoiseDensity = N, BiasInstability = B (floor / 0.664), RandomWalk = K; one value per axis in the order given,
+% or the largest over the axes when a sensor has not exactly three. Upper limits (terms not resolved) are marked.
+% gyro: gx_dps, gy_dps, gz_dps
+%   RandomWalk: upper limit on gx_dps, gy_dps, gz_dps
+gyro = gyroparams('NoiseDensity', [7.399694e-04 7.864017e-04 7.220592e-04], ...
+    'BiasInstability', [1.815165e-04 1.741867e-04 1.983593e-04], ...
+    'RandomWalk', [1.353854e-05 1.559839e-05 1.178840e-05]);
+% accel: ax_g, ay_g, az_g
+accel = accelparams('NoiseDensity', [4.171023e-03 3.589361e-03 5.030660e-03], ...
+    'BiasInstability', [4.432940e-03 2.760226e-03 2.393858e-03], ...
+    'RandomWalk', [3.428625e-04 3.002506e-04 3.931067e-04]);
+imu = imuSensor('accel-gyro', 'SampleRate', 100, 'Gyroscope', gyro, 'Accelerometer', accel);
