@@ -25,7 +25,7 @@ from sklearn.base import BaseEstimator
 from statsmodels.regression.linear_model import burg, yule_walker
 from statsmodels.tsa.ar_model import AutoReg
 
-from . import __version__
+from ._version import __version__
 from .dynamics import (
     ar_free_run,
     ar_one_step,

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, NamedTuple, NoReturn
 import numpy as np
 import pandas as pd
 
-from . import __version__
+from ._version import __version__
 from .candidates import count_candidates
 from .exceptions import InputError
 from .fos import STOP_RULES
@@ -312,6 +312,16 @@ def _study_records(args: argparse.Namespace, path: str) -> list[_SensorRecord]:
     return records
 
 
+def _check_dask(args: argparse.Namespace) -> None:
+    """Refuse ``--scheduler``/``--workers`` before any work when the extra is missing."""
+    if args.scheduler or args.workers:
+        try:
+            from . import distributed  # noqa: F401
+        except ImportError as exc:
+            flag = "--scheduler" if args.scheduler else "--workers"
+            raise InputError(f"{flag}: {exc}") from None
+
+
 def _dask_client(args: argparse.Namespace) -> contextlib.AbstractContextManager:
     """The Dask client of ``--scheduler`` or ``--workers``; none (this process) without them."""
     if args.scheduler:
@@ -328,6 +338,7 @@ def _dask_client(args: argparse.Namespace) -> contextlib.AbstractContextManager:
 def _cmd_study(args: argparse.Namespace) -> int:
     from .harness import run_studies
 
+    _check_dask(args)
     json_path = _out_path(args.json) if args.json else None
     out = _out_dir(args.out)
     refuse_overwrite({"--json": json_path}, {f"the record {i + 1}": f

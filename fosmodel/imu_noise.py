@@ -58,7 +58,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from . import __version__
+from ._version import __version__
 from .allan import AllanResult, NoiseFit, allan_deviation, fit_noise, write_allan
 from .exceptions import InputError
 from .metrics import to_si_scale
@@ -329,7 +329,7 @@ class ImuNoise:
         """MATLAB ``gyroparams``/``accelparams`` (per axis, SI) and an ``imuSensor``."""
         lines = [f"% IMU noise from the Allan deviation of {Path(self.source).name} by fosmodel "
                  f"{__version__}.",
-                 "% NoiseDensity = N, BiasInstability = B (floor / 0.664), RandomWalk = K; "
+                 "% NoiseDensity = N, BiasInstability = B (Allan floor 0.664 B), RandomWalk = K; "
                  "one value per axis in the order given,",
                  "% or the largest over the axes when a sensor has not exactly three. Upper "
                  "limits (terms not resolved) are marked."]

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator
 
-from . import __version__
+from ._version import __version__
 from .blas import one_blas_thread
 from .candidates import (
     OUTPUT,
