@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pywt
 from scipy.signal import filtfilt, firwin, kaiserord
 
 from .exceptions import InputError
@@ -75,14 +76,8 @@ def wavelet_lowpass(y: object, levels: int = 4, wavelet: str = "db4") -> np.ndar
     Raises
     ------
     InputError
-        PyWavelets missing (install ``fosmodel[wavelet]``), unknown wavelet, bad level,
-        or a record too short for that many levels.
+        Unknown wavelet, bad level, or a record too short for that many levels.
     """
-    try:
-        import pywt
-    except ImportError:
-        raise InputError(
-            'wavelet denoising needs PyWavelets: pip install "fosmodel[wavelet]"') from None
     # PyWavelets' Cython kernels reject read-only buffers (e.g. views of a loaded DataFrame)
     arr = np.require(as_signal(y, "y"), requirements=["C", "W"])
     levels = _check_levels(levels)

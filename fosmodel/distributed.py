@@ -21,9 +21,14 @@ import logging
 import sys
 from collections.abc import Iterator, Sequence
 
-import dask
-from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
+
+try:
+    import dask
+    from distributed import Client, LocalCluster, as_completed
+except ImportError as exc:  # an optional extra: say how to get it
+    raise ImportError("running fits on Dask needs the 'distributed' extra: pip install "
+                      "'fosmodel[distributed]'") from exc
 
 from .exceptions import InputError
 from .harness import FitScore, StudyPlan, run_task

@@ -1,6 +1,7 @@
 import json
 import shutil
 import subprocess
+import sys
 import sysconfig
 from pathlib import Path
 
@@ -414,3 +415,17 @@ def test_commands_read_only_the_columns_they_use(record, tmp_path, capsys):
     assert _run(["allan", path, "--column", "gyro_y", "--out", tmp_path / "allan"], capsys)[0] == 0
     code, _, err = _run(["fit", path, "--column", "notes", "--out", tmp_path / "x.json"], capsys)
     assert code == 2 and "column 'notes'" in err and "not a number" in err
+
+
+@pytest.mark.parametrize("flag", [["--workers", "2"], ["--scheduler", "tcp://127.0.0.1:1"]])
+def test_dask_options_without_the_distributed_extra_say_how_to_get_it(record, tmp_path, capsys,
+                                                                      monkeypatch, flag):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # as if not installed
+    monkeypatch.delitem(sys.modules, "fosmodel.distributed", raising=False)
+    out = tmp_path / "study"
+    code, _, err = _run(["study", record, "--column", "gyro_y", "--sensor", "gyro", "--units",
+                         "deg/s", "--orders", "1", "--methods", "burg", *flag, "--out", out],
+                        capsys)
+    assert code == 2 and not out.exists()
+    assert err.strip() == (f"fosmodel: error: {flag[0]}: running fits on Dask needs the "
+                           "'distributed' extra: pip install 'fosmodel[distributed]'")

@@ -1,4 +1,3 @@
-import builtins
 import math
 
 import numpy as np
@@ -136,19 +135,6 @@ def test_wavelet_errors(pywt):
         wavelet_lowpass(LOW, wavelet="db99")
     with pytest.raises(InputError, match="non-finite"):
         wavelet_lowpass(np.r_[LOW, np.nan])
-
-
-def test_wavelet_without_pywavelets(monkeypatch):
-    real_import = builtins.__import__
-
-    def no_pywt(name, *args, **kwargs):
-        if name == "pywt":
-            raise ImportError("No module named 'pywt'")
-        return real_import(name, *args, **kwargs)
-
-    monkeypatch.setattr(builtins, "__import__", no_pywt)
-    with pytest.raises(InputError, match=r'pip install "fosmodel\[wavelet\]"'):
-        wavelet_lowpass(LOW)
 
 
 # -- dispatcher --------------------------------------------------------------------------
