@@ -50,7 +50,7 @@ from scipy.special import digamma
 
 from .exceptions import InputError
 from .metrics import STANDARD_GRAVITY, to_si_scale
-from .report import save_figure, write_tables
+from .output import save_figure, write_tables
 from .summary import Summary
 from .validation import as_signal, did_you_mean
 

@@ -62,7 +62,7 @@ from ._version import __version__
 from .allan import AllanResult, NoiseFit, allan_deviation, fit_noise, write_allan
 from .exceptions import InputError
 from .metrics import to_si_scale
-from .report import save_figure, write_tables
+from .output import save_figure, write_tables
 from .summary import Summary
 
 SENSORS = ("gyro", "accel")

@@ -11,8 +11,7 @@ from matplotlib.figure import Figure
 from .closeloop import LoopResult, worse_metrics
 from .diagnose import Finding
 from .judge import MIN_GAIN, MIN_HALF_WINDOWS
-from .output import write_text
-from .report import save_figure, write_tables
+from .output import save_figure, write_tables, write_text
 from .summary import markdown_table
 
 

@@ -8,6 +8,8 @@ killed run is removed by the next write to the same destination.  A report
 directory is written beside its destination and moved into place in one step
 (:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
 that no output names a file the command reads, however the two are spelt.
+:func:`write_tables` and :func:`save_figure` write a table (Markdown, CSV,
+LaTeX) and a figure (PNG, SVG) that way.
 """
 
 from __future__ import annotations
@@ -19,9 +21,14 @@ import shutil
 import uuid
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 from .exceptions import InputError
+from .summary import markdown_table
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
 
 Paths = Mapping[str, "str | os.PathLike[str] | None"]
 
@@ -199,3 +206,23 @@ def _move(tmp: Path, out: Path) -> None:
     else:
         out.parent.mkdir(parents=True, exist_ok=True)
         os.replace(tmp, out)
+
+
+def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
+    """``stem.md``, ``stem.csv`` and ``stem.tex`` in ``out_dir``, each written atomically."""
+    paths = [out_dir / f"{stem}.{ext}" for ext in ("md", "csv", "tex")]
+    write_text(paths[0], markdown_table(frame, digits=4) + "\n")
+    write_text(paths[1], frame.to_csv(index=False))
+    write_text(paths[2], frame.to_latex(index=False, float_format="%.4g", na_rep="--"))
+    return paths
+
+
+def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
+    """``stem.png`` and ``stem.svg`` in ``out_dir``, each written atomically."""
+    paths = []
+    for ext in ("png", "svg"):
+        path = out_dir / f"{stem}.{ext}"
+        with atomic_write(path, "wb") as fh:
+            fig.savefig(fh, format=ext, dpi=120)
+        paths.append(path)
+    return paths

@@ -15,7 +15,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .harness import LEVEL, StudyResult, method_label
-from .output import atomic_write, write_text
+from .output import save_figure, write_tables, write_text
 from .summary import markdown_table
 
 _ORDER = ["yw", "cov", "burg", "gm", "fos"]
@@ -82,15 +82,6 @@ def level_table(result: StudyResult) -> pd.DataFrame:
         drop=True)
 
 
-def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
-    """``stem.md``, ``stem.csv`` and ``stem.tex`` in ``out_dir``."""
-    paths = [out_dir / f"{stem}.{ext}" for ext in ("md", "csv", "tex")]
-    write_text(paths[0], markdown_table(frame, digits=4) + "\n")
-    write_text(paths[1], frame.to_csv(index=False))
-    write_text(paths[2], frame.to_latex(index=False, float_format="%.4g", na_rep="--"))
-    return paths
-
-
 def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
     """One-step prediction MSE and outage position error against model order, per method."""
     cfg = result.config
@@ -121,17 +112,6 @@ def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
     axes[0].legend(fontsize="small")
     fig.suptitle(f"{title}: {protocol} protocol")
     return fig
-
-
-def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
-    """``stem.png`` and ``stem.svg`` in ``out_dir``."""
-    paths = []
-    for ext in ("png", "svg"):
-        path = out_dir / f"{stem}.{ext}"
-        with atomic_write(path, "wb") as fh:
-            fig.savefig(fh, format=ext, dpi=120)
-        paths.append(path)
-    return paths
 
 
 def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
