@@ -1,5 +1,5 @@
 % IMU noise from the Allan deviation of unmoved-with-x-pointing-forward-10min.csv.gz by fosmodel 0.1.0.
-% NoiseDensity = N, BiasInstability = B (floor / 0.664), RandomWalk = K; one value per axis in the order given,
+% NoiseDensity = N, BiasInstability = B (Allan floor 0.664 B), RandomWalk = K; one value per axis in the order given,
 % or the largest over the axes when a sensor has not exactly three. Upper limits (terms not resolved) are marked.
 % gyro: gx_dps, gy_dps, gz_dps
 %   BiasInstability: upper limit on gy_dps, gz_dps
