@@ -38,7 +38,7 @@ from fosmodel import FOSModel
 from fosmodel.baselines import ARModel, GaussMarkovModel
 from fosmodel.kalman import KalmanFilter, run_filter
 from fosmodel.report import save_figure, write_tables
-from fosmodel.statespace import position_velocity_error_model, to_state_space
+from fosmodel.statespace import StateSpace, position_velocity_error_model, to_state_space
 from fosmodel.summary import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "kalman_static"
@@ -107,11 +107,20 @@ def updated(n: int, cycle: int | None) -> np.ndarray:
 
 def position_error(model: object, accel: np.ndarray, noise: np.ndarray, sigma: float,
                    cycle: int | None) -> tuple[np.ndarray, np.ndarray]:
-    """Estimated minus true position error at samples 1..N-1 (sample 0: both zero), and the
-    filter's variance of it."""
+    """:func:`filter_position_error` with a fitted model's shaping filter, started from its
+    stationary covariance."""
     error = to_state_space(model)
+    return filter_position_error(error, error.stationary_covariance(), accel, noise, sigma,
+                                 cycle)
+
+
+def filter_position_error(error: StateSpace, p0_error: np.ndarray, accel: np.ndarray,
+                          noise: np.ndarray, sigma: float,
+                          cycle: int | None) -> tuple[np.ndarray, np.ndarray]:
+    """Estimated minus true position error at samples 1..N-1 (sample 0: both zero), and the
+    filter's variance of it, with the error model ``error`` started from ``p0_error``."""
     system = position_velocity_error_model(error, DT)
-    p0 = block_diag(np.zeros((2, 2)), error.stationary_covariance())
+    p0 = block_diag(np.zeros((2, 2)), p0_error)
     kf = KalmanFilter.from_state_space(system, [[sigma**2]], np.zeros(system.n_states), p0)
     truth = integrate(accel - error.mu)
     z = np.where(updated(len(truth), cycle), truth + sigma * noise, np.nan)
