@@ -52,7 +52,7 @@ from fosmodel.allan_statespace import (
 )
 from fosmodel.loader import load_record
 from fosmodel.metrics import STANDARD_GRAVITY
-from fosmodel.report import save_figure, write_tables
+from fosmodel.output import save_figure, write_tables
 from fosmodel.statespace import StateSpace, to_state_space
 from fosmodel.summary import markdown_table
 
