@@ -400,6 +400,14 @@ class NoiseFit:
                 out.append((float(res.taus[i]), float(ratio[i])))
         return out
 
+    def conservative(self, term: str) -> tuple[float, str]:
+        """The value of a term to hand to a filter or a configuration, and what it is: the
+        fitted coefficient where resolved (``"fitted"``), else its upper limit (``"upper
+        limit"``), never a silent 0."""
+        if self.resolved[term]:
+            return self.coefficients[term], "fitted"
+        return self.limits[term], "upper limit"
+
     @property
     def stderr(self) -> dict[str, float]:
         """Standard error of each coefficient, ``se(c^2)/(2c)``; NaN where the fit put zero."""

@@ -70,8 +70,8 @@ class TermValue(NamedTuple):
 def model_terms(fit: NoiseFit) -> dict[str, TermValue]:
     """The value of each fitted term that :func:`allan_state_space` uses, and its source.
 
-    A resolved term gives its fitted coefficient.  A term that is not resolved gives its upper
-    limit (:attr:`~fosmodel.allan.NoiseFit.limits`): the conservative choice for a filter,
+    :meth:`~fosmodel.allan.NoiseFit.conservative`: a resolved term gives its fitted
+    coefficient, one that is not resolved its upper limit: the conservative choice for a filter,
     which then claims at most that much more uncertainty than the data support, where the
     fitted value (often zero) would let it trust a bias it cannot see.  Quantization, the rate
     ramp and the sinusoid are listed with the reason they get no state.
@@ -88,8 +88,7 @@ def model_terms(fit: NoiseFit) -> dict[str, TermValue]:
     """
     out = {}
     for term in fit.terms:
-        value = fit.coefficients[term] if fit.resolved[term] else fit.limits[term]
-        source = "fitted" if fit.resolved[term] else "upper limit"
+        value, source = fit.conservative(term)
         out[term] = TermValue(value, NOT_CARRIED.get(term, source))
     return out
 

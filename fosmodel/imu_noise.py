@@ -199,12 +199,9 @@ class AxisNoise:
     def value(self, term: str) -> tuple[float, str]:
         """A term's coefficient in the record's units and what it is: ``"fitted"``,
         ``"upper limit"`` (not resolved) or ``"not fitted"`` (NaN)."""
-        fit = self.fit
-        if term not in fit.terms:
+        if term not in self.fit.terms:
             return math.nan, "not fitted"
-        if fit.resolved[term]:
-            return fit.coefficients[term], "fitted"
-        return fit.limits[term], "upper limit"
+        return self.fit.conservative(term)
 
     def si(self, term: str) -> float:
         """A term's exported value (:meth:`value`) in SI: rad/s or m/s^2 based."""
