@@ -30,7 +30,8 @@ import numpy as np
 
 from data_synth import make_scenario
 from fosmodel.distributed import local_client
-from fosmodel.harness import StudyConfig, StudyPlan, plan_study, run_studies
+from fosmodel.harness import StudyConfig, StudyPlan, plan_study
+from fosmodel.runner import run_studies
 
 
 def make_plan(duration: float) -> StudyPlan:

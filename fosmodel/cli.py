@@ -336,7 +336,7 @@ def _dask_client(args: argparse.Namespace) -> contextlib.AbstractContextManager:
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
-    from .harness import run_studies
+    from .runner import run_studies
 
     _check_dask(args)
     json_path = _out_path(args.json) if args.json else None

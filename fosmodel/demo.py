@@ -21,10 +21,11 @@ from pathlib import Path
 import pandas as pd
 
 from .closeloop import LoopConfig, close_loop
-from .harness import StudyConfig, StudyResult, run_study
+from .harness import StudyConfig, StudyResult
 from .loop_report import write_loop_report
 from .output import report_directory
 from .report import paper_table, write_study
+from .runner import run_study
 from .samples import load_mpu6050_static
 
 SEED = 2013

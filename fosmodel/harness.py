@@ -30,14 +30,12 @@ scoring.  Runtime is measured around ``fit`` only.
 A study is a set of independent fits: :func:`plan_study` checks, splits and
 denoises the record and lists the fits (:class:`FitTask`), :func:`run_task`
 fits and scores one with one BLAS thread (so that it gives the same bits in any
-process), and :func:`assemble` makes the rows.  :func:`run_studies` runs the
-tasks of several studies in this process or on a Dask cluster
-(:mod:`fosmodel.distributed`, imported only then).
+process), and :func:`assemble` makes the rows.  :mod:`fosmodel.runner` runs the tasks
+of one or several studies, in this process or on a Dask cluster.
 """
 
 from __future__ import annotations
 
-import sys
 import time
 import warnings
 from collections.abc import Sequence
@@ -45,7 +43,6 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
 
 from .baselines import METHOD_LABELS, make_baseline
 from .blas import one_blas_thread
@@ -390,69 +387,6 @@ def assemble(plan: StudyPlan, scores: Sequence[FitScore]) -> StudyResult:
             for protocol, task in _row_tasks(plan.config, plan.level_taus)]
     notes = sorted({note for score in scores for note in score.notes})
     return StudyResult(pd.DataFrame(rows), plan.config, plan.split, notes, plan.level_taus)
-
-
-def run_studies(
-    plans: Sequence[StudyPlan], *, client: object = None, progress: bool = False
-) -> list[StudyResult]:
-    """Run every task of several studies, here one by one or all at once on a Dask cluster.
-
-    Parameters
-    ----------
-    plans : sequence of StudyPlan
-    client : distributed.Client, optional
-        Send the tasks to its cluster (see :mod:`fosmodel.distributed`); by
-        default they run in this process, in order.
-    progress : bool
-        Show a progress bar on stderr.
-
-    Returns
-    -------
-    list of StudyResult
-        One per plan; equal whichever way the tasks ran, ``runtime_s`` aside.
-    """
-    if client is None:
-        scores = _run_here(plans, progress)
-    else:
-        from .distributed import run_tasks
-
-        scores = run_tasks(plans, client, progress=progress)
-    return [assemble(plan, plan_scores) for plan, plan_scores in zip(plans, scores)]
-
-
-def _run_here(plans: Sequence[StudyPlan], progress: bool) -> list[list[FitScore]]:
-    bar = tqdm(total=sum(len(plan.tasks) for plan in plans), disable=not progress,
-               file=sys.stderr, desc="study", unit="fit")
-    scores = []
-    with bar:
-        for plan in plans:
-            scores.append([])
-            for task in plan.tasks:
-                scores[-1].append(run_task(plan, task))
-                bar.update()
-    return scores
-
-
-def run_study(
-    y: object, config: StudyConfig, *, progress: bool = False, client: object = None
-) -> StudyResult:
-    """Fit, select and score every configuration of ``config`` on the record ``y``.
-
-    Parameters
-    ----------
-    y : array-like
-        The sensor record (the error signal of a static test), in ``config.units``.
-    config : StudyConfig
-    progress : bool
-        Show a progress bar on stderr.
-    client : distributed.Client, optional
-        Run the fits on its Dask cluster instead of in this process.
-
-    Returns
-    -------
-    StudyResult
-    """
-    return run_studies([plan_study(y, config)], client=client, progress=progress)[0]
 
 
 def _signals(y, split, denoiser, rate) -> tuple[np.ndarray, np.ndarray]:

@@ -9,7 +9,8 @@ from fosmodel import harness
 from fosmodel.denoise import denoise
 from fosmodel.dynamics import ar_free_run, ar_one_step
 from fosmodel.exceptions import InputError
-from fosmodel.harness import Split, StudyConfig, run_study
+from fosmodel.harness import Split, StudyConfig
+from fosmodel.runner import run_study
 
 RATE = 10.0
 
