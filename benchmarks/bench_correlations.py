@@ -2,10 +2,10 @@
 
 ``FOSModel(correlations="fast")`` (the default) gets every correlation the
 search needs from tables of lagged-signal correlations with end corrections
-(:class:`fosmodel.correlations.LagCorrelations`);
+(:class:`fosmodel.core.correlations.LagCorrelations`);
 ``FOSModel(correlations="reference")`` builds the N x C candidate matrix with
-:func:`fosmodel.candidates.evaluate_terms` and runs the same kernel on it point
-by point (:class:`fosmodel.fos._DataCorrelations`).  Both are timed through
+:func:`fosmodel.core.candidates.evaluate_terms` and runs the same kernel on it point
+by point (:class:`fosmodel.core.fos._DataCorrelations`).  Both are timed through
 ``fit`` (``stop="max_terms"``), interleaved, best of ``--repeats`` loops; the script
 checks that they select the same terms in the same order and that their
 weights agree to 1e-8 relative to the largest weight (exit code 1 if not).
@@ -33,8 +33,8 @@ from _common import interleaved_best, limit_blas, machine_line
 from bench_scaling import make_signals
 
 from fosmodel import FOSModel, fos
-from fosmodel.candidates import CandidateSpec, evaluate_terms, generate_terms
-from fosmodel.fos import center
+from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
+from fosmodel.core.fos import center
 
 TOL = 1e-8
 FULL = [  # (N, L, CP, exogenous lags, k)

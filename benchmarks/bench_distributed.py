@@ -29,9 +29,9 @@ import dask
 import numpy as np
 
 from data_synth import make_scenario
-from fosmodel.distributed import local_client
-from fosmodel.harness import StudyConfig, StudyPlan, plan_study
-from fosmodel.runner import run_studies
+from fosmodel.study.distributed import local_client
+from fosmodel.study.harness import StudyConfig, StudyPlan, plan_study
+from fosmodel.study.runner import run_studies
 
 
 def make_plan(duration: float) -> StudyPlan:

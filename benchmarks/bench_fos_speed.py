@@ -19,7 +19,7 @@ FOS runs with its default stopping rule (``korenberg``) and at full order
 (``max_terms = L``: as many weights as Burg estimates).  ``FOS ms`` is a fit
 of a candidate set fitted before in the process (the usual case in a study:
 the same orders on many records); ``1st ms`` is the first fit of a candidate
-set, which also plans its correlation tables (``fosmodel.shapes.layout`` and
+set, which also plans its correlation tables (``fosmodel.core.shapes.layout`` and
 ``direct_groups``, cached per candidate set like an FFT plan).
 
 Table 2, FOS against FROLS (sysidentpy) on the identical candidate set (lags
@@ -32,7 +32,7 @@ it, it shows as the term ``1``).  The table lists the terms on which the two
 differ.
 
 Table 3, FOS against orthogonal matching pursuit (scikit-learn) on the same
-candidates, as an explicit matrix: ``fosmodel.candidates.evaluate_terms`` on
+candidates, as an explicit matrix: ``fosmodel.core.candidates.evaluate_terms`` on
 the centred signal, columns centred and scaled to unit norm (OMP assumes unit
 norm), then ``OrthogonalMatchingPursuit(n_nonzero_coefs=k,
 fit_intercept=True)`` (its default ``precompute="auto"`` forms the Gram
@@ -62,9 +62,9 @@ from statsmodels.regression.linear_model import burg
 
 from data_synth import make_scenario
 from fosmodel import FOSModel, fos
-from fosmodel.candidates import CandidateSpec, evaluate_terms, generate_terms
-from fosmodel.fos import center
-from fosmodel.shapes import clear_plans
+from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
+from fosmodel.core.fos import center
+from fosmodel.core.shapes import clear_plans
 
 N = 36_000
 

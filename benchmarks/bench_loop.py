@@ -27,10 +27,10 @@ import pandas as pd
 from _common import machine_line
 
 from data_synth import make_scenario
-from fosmodel.baselines import ARModel
-from fosmodel.closeloop import LoopConfig, close_loop
-from fosmodel.metrics import outage_metrics
-from fosmodel.model import FOSModel
+from fosmodel.loop.closeloop import LoopConfig, close_loop
+from fosmodel.models.baselines import ARModel
+from fosmodel.models.model import FOSModel
+from fosmodel.noise.metrics import outage_metrics
 
 HERE = Path(__file__).resolve().parent
 ADIS = HERE.parent.parent / "shared" / "data" / "adis16405" / "imu1.csv.gz"

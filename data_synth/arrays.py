@@ -17,7 +17,7 @@ import numpy as np
 
 from data_synth.base import Source, as_float_tuple, check_column_name
 from data_synth.units import RATE_UNITS, density_to_arw, random_walk_step, rate_factor, white_sigma
-from fosmodel.arrays import correlation
+from fosmodel.filter.arrays import correlation
 
 
 def correlated_normal(n: int, corr: np.ndarray, rng: np.random.Generator) -> np.ndarray:

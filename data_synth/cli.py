@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 from data_synth.io import write_record
 from data_synth.scenarios import SCENARIOS, make_scenario
-from fosmodel.exceptions import InputError
+from fosmodel.core.exceptions import InputError
 
 
 def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
 
     Raises
     ------
-    fosmodel.exceptions.InputError
+    fosmodel.core.exceptions.InputError
         Unknown scenario or parameter, missing ``--out``, unusable values.
     """
     if args.list:

@@ -17,7 +17,7 @@ import os
 from pathlib import Path
 
 from data_synth.record import SynthRecord
-from fosmodel.output import atomic_write, write_text
+from fosmodel.io.output import atomic_write, write_text
 
 _CHUNK = 65536
 

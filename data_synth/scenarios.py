@@ -61,7 +61,7 @@ from data_synth.units import (
     rrw_to_density,
     vrw_to_density,
 )
-from fosmodel.exceptions import InputError
+from fosmodel.core.exceptions import InputError
 
 #: Seed 001 Table 1, AHRS300CC: chamber temperatures and Y-axis noise coefficients.
 CC300_TEMPS_C = (-30.0, 0.0, 30.0, 60.0)
@@ -146,7 +146,7 @@ def make_scenario(
 
     Raises
     ------
-    fosmodel.exceptions.InputError
+    fosmodel.core.exceptions.InputError
         Unknown scenario or parameter, or values that cannot be used.
     """
     if name not in SCENARIOS:

@@ -1,6 +1,6 @@
 """Exact lag models of synthetic records, in fosmodel's term grammar.
 
-Terms are :class:`fosmodel.candidates.Term` factor tuples (``(channel, lag)``
+Terms are :class:`fosmodel.core.candidates.Term` factor tuples (``(channel, lag)``
 pairs in canonical order, the modelled signal being the channel ``"y"``).
 A *term set* maps factor tuples to coefficients; :func:`exact_model` adds
 up the lag representations of a record's components.
@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fosmodel.candidates import OUTPUT, Term, evaluate_sum
+from fosmodel.core.candidates import OUTPUT, Term, evaluate_sum
 
 Factor = tuple[str, int]
 Factors = tuple[Factor, ...]

@@ -4,8 +4,8 @@ should find, and which of them are slow (judged on the outage error rather than 
 
 from __future__ import annotations
 
-from fosmodel.candidates import OUTPUT, Term
-from fosmodel.effects import Effect
+from fosmodel.core.candidates import OUTPUT, Term
+from fosmodel.loop.effects import Effect
 
 #: Source kinds whose effect is slow: a one-step predictor barely sees them.
 SLOW_KINDS = ("temperature_bias", "drift", "bias_step", "random_walk")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib
 import json
 import logging
 import math
@@ -22,16 +23,16 @@ import numpy as np
 import pandas as pd
 
 from ._version import __version__
-from .candidates import count_candidates
-from .exceptions import InputError
-from .fos import STOP_RULES
-from .levels import levels_for
-from .loader import OUTLIER_K, OUTLIER_MODES, Record, load_record, parse_scales
-from .model import FOSModel
-from .output import atomic_write, refuse_overwrite, report_directory, write_text
+from .core.candidates import count_candidates
+from .core.exceptions import InputError
+from .core.fos import STOP_RULES
+from .core.levels import levels_for
+from .io.loader import OUTLIER_K, OUTLIER_MODES, Record, load_record, parse_scales
+from .io.output import atomic_write, refuse_overwrite, report_directory, write_text
+from .models.model import FOSModel
 
 if TYPE_CHECKING:
-    from .harness import StudyPlan, StudyResult
+    from .study.harness import StudyPlan, StudyResult
 
 log = logging.getLogger("fosmodel")
 
@@ -290,7 +291,7 @@ def _check_report_names(files: list[str], columns: list[str]) -> None:
 
 def _study_records(args: argparse.Namespace, path: str) -> list[_SensorRecord]:
     """The records of the file ``path``, one per column, each checked and planned."""
-    from .harness import StudyConfig, plan_study
+    from .study.harness import StudyConfig, plan_study
 
     rec = _load(args, path, columns=args.columns)
     rec.require_contiguous("the model-order study")
@@ -316,7 +317,7 @@ def _check_dask(args: argparse.Namespace) -> None:
     """Refuse ``--scheduler``/``--workers`` before any work when the extra is missing."""
     if args.scheduler or args.workers:
         try:
-            from . import distributed  # noqa: F401
+            importlib.import_module(".study.distributed", __package__)
         except ImportError as exc:
             flag = "--scheduler" if args.scheduler else "--workers"
             raise InputError(f"{flag}: {exc}") from None
@@ -325,18 +326,18 @@ def _check_dask(args: argparse.Namespace) -> None:
 def _dask_client(args: argparse.Namespace) -> contextlib.AbstractContextManager:
     """The Dask client of ``--scheduler`` or ``--workers``; none (this process) without them."""
     if args.scheduler:
-        from .distributed import connect
+        from .study.distributed import connect
 
         return connect(args.scheduler, args.connect_timeout)
     if args.workers:
-        from .distributed import local_client
+        from .study.distributed import local_client
 
         return local_client(args.workers)
     return contextlib.nullcontext()
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
-    from .runner import run_studies
+    from .study.runner import run_studies
 
     _check_dask(args)
     json_path = _out_path(args.json) if args.json else None
@@ -374,7 +375,7 @@ def _write_study_reports(records: list[_SensorRecord], results: list[StudyResult
     Everything is written to a directory beside ``out`` first, then moved into
     place, so a failure leaves ``out`` as it was (:func:`report_directory`).
     """
-    from .report import write_study, write_tables
+    from .study.report import write_study, write_tables
 
     single = len(records) == 1
     with report_directory(out, inputs) as tmp:
@@ -387,7 +388,7 @@ def _write_study_reports(records: list[_SensorRecord], results: list[StudyResult
 
 def _combined_best(records: list[_SensorRecord], results: list[StudyResult]) -> pd.DataFrame:
     """Every record's best rows in one table, led by its report's name, file and column."""
-    from .report import study_table
+    from .study.report import study_table
 
     lead = ["Record", "File", "Column"]
     frame = pd.concat([study_table(result, result.best()).assign(
@@ -398,7 +399,7 @@ def _combined_best(records: list[_SensorRecord], results: list[StudyResult]) -> 
 
 def _print_studies(records: list[_SensorRecord], results: list[StudyResult]) -> None:
     """The comparison table of one record, or the main columns of every record's best rows."""
-    from .report import paper_table
+    from .study.report import paper_table
 
     single = len(records) == 1
     if single:
@@ -433,8 +434,8 @@ def _fractions(text: str) -> tuple[float, float]:
 
 
 def _cmd_close_loop(args: argparse.Namespace) -> int:
-    from .closeloop import LoopConfig, close_loop
-    from .loop_report import effects_table, write_loop_report
+    from .loop.closeloop import LoopConfig, close_loop
+    from .loop.loop_report import effects_table, write_loop_report
 
     json_path = _out_path(args.json) if args.json else None
     model_path = _out_path(args.model) if args.model else None
@@ -479,7 +480,7 @@ def _cmd_allan(args: argparse.Namespace) -> int:
     if args.gyro_units or args.accel_units:
         raise InputError("--gyro-units and --accel-units go with --columns; give --sensor and "
                          "--units with --column")
-    from .allan import allan_deviation, fit_noise, write_allan
+    from .noise.allan import allan_deviation, fit_noise, write_allan
 
     json_path = _out_path(args.json) if args.json else None
     out = _out_dir(args.out)
@@ -508,7 +509,7 @@ def _cmd_allan(args: argparse.Namespace) -> int:
 
 
 def _cmd_allan_axes(args: argparse.Namespace) -> int:
-    from .imu_noise import imu_noise, resolve_axes, write_imu_noise
+    from .noise.imu_noise import imu_noise, resolve_axes, write_imu_noise
 
     if args.sensor or args.units:
         raise InputError("--sensor and --units go with --column; with --columns give "

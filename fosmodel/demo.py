@@ -20,13 +20,13 @@ from pathlib import Path
 
 import pandas as pd
 
-from .closeloop import LoopConfig, close_loop
-from .harness import StudyConfig, StudyResult
-from .loop_report import write_loop_report
-from .output import report_directory
-from .report import paper_table, write_study
-from .runner import run_study
-from .samples import load_mpu6050_static
+from .io.output import report_directory
+from .io.samples import load_mpu6050_static
+from .loop.closeloop import LoopConfig, close_loop
+from .loop.loop_report import write_loop_report
+from .study.harness import StudyConfig, StudyResult
+from .study.report import paper_table, write_study
+from .study.runner import run_study
 
 SEED = 2013
 RECORDS = {  # table number, scenario, its overrides, sensor, units
@@ -100,7 +100,7 @@ def run_demo(out_dir: Path) -> dict[str, StudyResult]:
     """Run both parts and say where everything went.
 
     Everything is written beside ``out_dir`` and moved onto it at the end
-    (:func:`fosmodel.output.report_directory`): an interrupted demo leaves
+    (:func:`fosmodel.io.output.report_directory`): an interrupted demo leaves
     ``out_dir`` as it was.
     """
     with report_directory(out_dir) as staging:

@@ -18,8 +18,8 @@ import pandas as pd
 from readme_section import README, replace_section
 
 from data_synth import make_scenario
-from fosmodel.allan import TERMS, allan_deviation, fit_noise, write_allan
-from fosmodel.summary import markdown_table
+from fosmodel.models.summary import markdown_table
+from fosmodel.noise.allan import TERMS, allan_deviation, fit_noise, write_allan
 
 OUT = Path(__file__).resolve().parent / "results" / "allan_seed004"
 HOURS = 12.0

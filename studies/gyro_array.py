@@ -24,7 +24,7 @@ from matplotlib.figure import Figure
 
 from data_synth import CorrelatedRandomWalk, CorrelatedWhiteNoise, compose, make_scenario
 from data_synth.scenarios import ARRAY_ARW, ARRAY_RRW
-from fosmodel.arrays import (
+from fosmodel.filter.arrays import (
     CORR_EQ_8_8,
     CORR_Q3,
     CORR_Q5,
@@ -40,9 +40,9 @@ from fosmodel.arrays import (
     recursive_gain,
     steady_state_gain,
 )
-from fosmodel.output import write_text
-from fosmodel.report import save_figure, write_tables
-from fosmodel.summary import markdown_table
+from fosmodel.io.output import write_text
+from fosmodel.models.summary import markdown_table
+from fosmodel.study.report import save_figure, write_tables
 
 OUT = Path(__file__).resolve().parent / "results" / "gyro_array"
 NAMES = tuple(f"gyro_{i}" for i in range(1, 9))

@@ -7,10 +7,10 @@ filter this study imports).  Each axis is split in halves of 100,000 samples (1.
 
 On the first half: the 1st-order Gauss-Markov, AR(4) by Burg and FOS (maximum lag L chosen
 among 4..10 as ``kalman_static.py`` does) models, and the Allan model of
-:mod:`fosmodel.allan_statespace`: the Allan deviation of the training half, its IEEE Std 952
+:mod:`fosmodel.filter.allan_statespace`: the Allan deviation of the training half, its IEEE Std 952
 fit, and the white + Gauss-Markov + random-walk state space (terms not resolved at their
 upper limits).  GM, AR and FOS start from their stationary covariance; the Allan model from
-:func:`~fosmodel.allan_statespace.initial_covariance` (white and Gauss-Markov stationary, the
+:func:`~fosmodel.filter.allan_statespace.initial_covariance` (white and Gauss-Markov stationary, the
 random walk from its spread about the training mean).
 
 On the second half: the 1-D position/velocity error filter (seed 000 eq. 5.7) with simulated
@@ -43,18 +43,18 @@ import pandas as pd
 from kalman_static import GM, RATE, choose_fos_lag, filter_position_error, fit_models, statistics
 from matplotlib.figure import Figure
 
-from fosmodel.allan import NoiseFit, allan_deviation, fit_noise
-from fosmodel.allan_statespace import (
+from fosmodel.filter.allan_statespace import (
     allan_state_space,
     initial_covariance,
     model_adev,
     model_terms,
 )
-from fosmodel.loader import load_record
-from fosmodel.metrics import STANDARD_GRAVITY
-from fosmodel.output import save_figure, write_tables
-from fosmodel.statespace import StateSpace, to_state_space
-from fosmodel.summary import markdown_table
+from fosmodel.filter.statespace import StateSpace, to_state_space
+from fosmodel.io.loader import load_record
+from fosmodel.io.output import save_figure, write_tables
+from fosmodel.models.summary import markdown_table
+from fosmodel.noise.allan import NoiseFit, allan_deviation, fit_noise
+from fosmodel.noise.metrics import STANDARD_GRAVITY
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

@@ -5,7 +5,7 @@ A static accelerometer error record (scenario ``paper_accel_y`` at 20 Hz, four h
 fitted; FOS's maximum lag L is chosen among 4..10 by the one-step MSE on the last quarter of
 the training half (fitted on the rest), then refitted on the whole half.  On the second half
 the same filter runs with each model: states position error, velocity error and the error
-model's states (:func:`fosmodel.statespace.position_velocity_error_model`, seed 000 eq. 5.7),
+model's states (:func:`fosmodel.filter.statespace.position_velocity_error_model`, seed 000 eq. 5.7),
 with simulated position updates of standard deviation 0.01, 0.1 and 1 m, at every sample
 (20 Hz) or in update/prediction cycles of 10/10, 30/30, 60/60 and 120/120 s.  The
 accelerometer is compensated by the training mean (the calibrated bias, as seed 000 removed
@@ -35,11 +35,11 @@ from scipy.linalg import block_diag
 
 from data_synth import make_scenario
 from fosmodel import FOSModel
-from fosmodel.baselines import ARModel, GaussMarkovModel
-from fosmodel.kalman import KalmanFilter, run_filter
-from fosmodel.report import save_figure, write_tables
-from fosmodel.statespace import StateSpace, position_velocity_error_model, to_state_space
-from fosmodel.summary import markdown_table
+from fosmodel.filter.kalman import KalmanFilter, run_filter
+from fosmodel.filter.statespace import StateSpace, position_velocity_error_model, to_state_space
+from fosmodel.models.baselines import ARModel, GaussMarkovModel
+from fosmodel.models.summary import markdown_table
+from fosmodel.study.report import save_figure, write_tables
 
 OUT = Path(__file__).resolve().parent / "results" / "kalman_static"
 RATE = 20.0

@@ -14,9 +14,9 @@ from pathlib import Path
 from readme_section import README, replace_section
 
 from fosmodel.demo import run_demo
-from fosmodel.harness import StudyResult
-from fosmodel.report import paper_table
-from fosmodel.summary import markdown_table
+from fosmodel.models.summary import markdown_table
+from fosmodel.study.harness import StudyResult
+from fosmodel.study.report import paper_table
 
 OUT = Path(__file__).resolve().parent / "results" / "paper_demo"
 

@@ -28,17 +28,17 @@ import numpy as np
 import pandas as pd
 from readme_section import README, replace_section
 
-from fosmodel.closeloop import LoopConfig, LoopResult, close_loop, score_family
-from fosmodel.diagnose import least_squares_spectrum
-from fosmodel.effects import CandidateFamily, Effect
-from fosmodel.harness import StudyConfig, StudyResult
-from fosmodel.imu_noise import Axis, imu_noise, write_imu_noise
-from fosmodel.loader import Record, load_record
-from fosmodel.loop_report import evaluation_text, write_loop_report
-from fosmodel.report import paper_table, write_study
-from fosmodel.runner import run_study
-from fosmodel.samples import load_mpu6050_static
-from fosmodel.summary import markdown_table
+from fosmodel.io.loader import Record, load_record
+from fosmodel.io.samples import load_mpu6050_static
+from fosmodel.loop.closeloop import LoopConfig, LoopResult, close_loop, score_family
+from fosmodel.loop.diagnose import least_squares_spectrum
+from fosmodel.loop.effects import CandidateFamily, Effect
+from fosmodel.loop.loop_report import evaluation_text, write_loop_report
+from fosmodel.models.summary import markdown_table
+from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
+from fosmodel.study.harness import StudyConfig, StudyResult
+from fosmodel.study.report import paper_table, write_study
+from fosmodel.study.runner import run_study
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

@@ -22,10 +22,10 @@ from numpy.polynomial import Polynomial
 
 from data_synth import make_scenario
 from data_synth.scenarios import CC300_ACCEL_VRW, CC300_GYRO_ARW, CC300_TEMPS_C
-from fosmodel.output import write_text
-from fosmodel.report import save_figure, write_tables
-from fosmodel.summary import markdown_table
-from fosmodel.temperature import (
+from fosmodel.io.output import write_text
+from fosmodel.models.summary import markdown_table
+from fosmodel.study.report import save_figure, write_tables
+from fosmodel.study.temperature import (
     concatenate_plateaus,
     global_models,
     held_out_comparison,

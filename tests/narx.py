@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fosmodel.candidates import Term
+from fosmodel.core.candidates import Term
 
 
 def narx(truth: dict[str, float], n: int, exog: dict[str, np.ndarray], noise_sd: float,

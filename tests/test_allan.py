@@ -30,7 +30,8 @@ from data_synth.units import (
     vrw_to_density,
 )
 from fosmodel import cli
-from fosmodel.allan import (
+from fosmodel.core.exceptions import InputError
+from fosmodel.noise.allan import (
     FLICKER_FLOOR,
     TERMS,
     allan_deviation,
@@ -38,7 +39,6 @@ from fosmodel.allan import (
     fit_noise,
     readoff,
 )
-from fosmodel.exceptions import InputError
 
 THREE_SIGMA = 0.9973
 

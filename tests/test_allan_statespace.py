@@ -9,8 +9,7 @@ from scipy.optimize import minimize_scalar
 from scipy.signal import lfilter
 
 from fosmodel import InputError
-from fosmodel.allan import AllanResult, NoiseFit, allan_deviation, fit_noise
-from fosmodel.allan_statespace import (
+from fosmodel.filter.allan_statespace import (
     GM_PEAK_ADEV,
     GM_PEAK_TAU,
     allan_state_space,
@@ -20,8 +19,9 @@ from fosmodel.allan_statespace import (
     model_adev,
     model_terms,
 )
-from fosmodel.kalman import KalmanFilter, run_filter
-from fosmodel.statespace import position_velocity_error_model
+from fosmodel.filter.kalman import KalmanFilter, run_filter
+from fosmodel.filter.statespace import position_velocity_error_model
+from fosmodel.noise.allan import AllanResult, NoiseFit, allan_deviation, fit_noise
 
 RATE = 20.0
 # ADIS16405-accelerometer-like terms in m/s^2 units (N m/s/sqrt(s), B m/s^2, K m/s^2/sqrt(s))

@@ -1,4 +1,4 @@
-"""Gyro arrays (fosmodel.arrays): seed 004's closed forms, the Kalman gain, drift, FOS."""
+"""Gyro arrays (fosmodel.filter.arrays): seed 004's closed forms, the Kalman gain, drift, FOS."""
 
 import math
 
@@ -8,7 +8,7 @@ import pytest
 from data_synth import CorrelatedRandomWalk, CorrelatedWhiteNoise, compose, make_scenario
 from data_synth.scenarios import ARRAY_ARW, ARRAY_RRW
 from fosmodel import InputError
-from fosmodel.arrays import (
+from fosmodel.filter.arrays import (
     CORR_EQ_8_8,
     CORR_Q3,
     CORR_Q5,

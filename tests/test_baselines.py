@@ -11,14 +11,14 @@ from statsmodels.tsa.ar_model import AutoReg
 from statsmodels.tsa.arima_process import ArmaProcess
 
 from fosmodel import InputError, UnstableModelWarning
-from fosmodel.baselines import (
+from fosmodel.models.baselines import (
     METHOD_LABELS,
     ARModel,
     GaussMarkovModel,
     _to_dynamics,
     make_baseline,
 )
-from fosmodel.summary import Summary
+from fosmodel.models.summary import Summary
 
 METHODS = ["yule_walker", "covariance", "burg"]
 PHI2 = np.array([1.5, -0.7])                                    # roots of modulus 0.84

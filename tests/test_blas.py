@@ -3,8 +3,9 @@
 import numpy as np
 from threadpoolctl import threadpool_info
 
-from fosmodel import FOSModel, correlations
-from fosmodel.blas import one_blas_thread
+from fosmodel import FOSModel
+from fosmodel.core import correlations
+from fosmodel.core.blas import one_blas_thread
 
 
 def _blas_threads() -> list[int]:

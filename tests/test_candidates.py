@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from fosmodel.candidates import (
+from fosmodel.core.candidates import (
     CandidateSpec,
     Term,
     check_terms_fit_spec,
@@ -12,7 +12,7 @@ from fosmodel.candidates import (
     evaluate_terms,
     generate_terms,
 )
-from fosmodel.exceptions import InputError
+from fosmodel.core.exceptions import InputError
 
 
 @pytest.mark.parametrize(

@@ -11,9 +11,8 @@ import pytest
 from records import bursty_csv, spiky_csv
 from scipy.signal import lfilter
 
-import fosmodel
 from fosmodel import FOSModel, cli
-from fosmodel.levels import level_series, level_tau
+from fosmodel.core.levels import level_series, level_tau
 
 
 @pytest.fixture
@@ -422,8 +421,7 @@ def test_commands_read_only_the_columns_they_use(record, tmp_path, capsys):
 def test_dask_options_without_the_distributed_extra_say_how_to_get_it(record, tmp_path, capsys,
                                                                       monkeypatch, flag):
     monkeypatch.setitem(sys.modules, "distributed", None)  # as if not installed
-    monkeypatch.delitem(sys.modules, "fosmodel.distributed", raising=False)
-    monkeypatch.delattr(fosmodel, "distributed", raising=False)  # an earlier test's import
+    monkeypatch.delitem(sys.modules, "fosmodel.study.distributed", raising=False)
     out = tmp_path / "study"
     code, _, err = _run(["study", record, "--column", "gyro_y", "--sensor", "gyro", "--units",
                          "deg/s", "--orders", "1", "--methods", "burg", *flag, "--out", out],

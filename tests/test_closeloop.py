@@ -6,10 +6,10 @@ from scipy.signal import lfilter
 
 from data_synth import make_scenario
 from data_synth.true_effects import true_effects
-from fosmodel.closeloop import LoopConfig, close_loop, score_family
-from fosmodel.effects import CandidateFamily
-from fosmodel.exceptions import InputError
-from fosmodel.judge import MIN_HALF_WINDOWS, compare, forecasts, outage_windows
+from fosmodel.core.exceptions import InputError
+from fosmodel.loop.closeloop import LoopConfig, close_loop, score_family
+from fosmodel.loop.effects import CandidateFamily
+from fosmodel.loop.judge import MIN_HALF_WINDOWS, compare, forecasts, outage_windows
 
 
 def _run(name, seed, **kw):
@@ -86,8 +86,8 @@ def test_a_level_is_rejected_where_there_is_no_slow_error():
     y = lfilter([1.0], [1.0, -0.6, 0.1], rng.standard_normal(60_000)) * 0.3
     config = LoopConfig(rate=100.0, level_taus=(0.5, 2.0, 8.0))
     # the slow tests are what offer a level: force the offer by judging it directly
-    from fosmodel.closeloop import _Fitter, _Judge, _segments
-    from fosmodel.effects import Effect
+    from fosmodel.loop.closeloop import _Fitter, _Judge, _segments
+    from fosmodel.loop.effects import Effect
 
     segments = _segments(len(y), config)
     fitter = _Fitter(y, {}, segments, config)

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from fosmodel import correlations
-from fosmodel.candidates import CandidateSpec, evaluate_terms, generate_terms
-from fosmodel.correlations import LagCorrelations
-from fosmodel.fos import _DataCorrelations
+from fosmodel.core import correlations
+from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
+from fosmodel.core.correlations import LagCorrelations
+from fosmodel.core.fos import _DataCorrelations
 
 SPECS = [
     CandidateSpec(6, 1),

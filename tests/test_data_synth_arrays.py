@@ -11,14 +11,14 @@ from data_synth.arrays import (
     correlated_normal,
 )
 from data_synth.record import source_rng
-from fosmodel.arrays import correlation
+from fosmodel.filter.arrays import correlation
 
 Z = 4.5
 NAMES = tuple(f"gyro_{i}" for i in range(1, 9))
 
 
 def test_array_sources_refuse_an_impossible_correlation():
-    # the check is fosmodel.arrays.correlation's (tested there); the sources apply it
+    # the check is fosmodel.filter.arrays.correlation's (tested there); the sources apply it
     CorrelatedWhiteNoise(NAMES, (0.1,), corr=-1 / 7)  # the limit of seed 004 eq. 6.38
     with pytest.raises(ValueError, match="rho >= -0.142857"):
         CorrelatedWhiteNoise(NAMES, (0.1,), corr=-0.2)

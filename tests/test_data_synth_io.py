@@ -118,7 +118,7 @@ def test_failed_write_leaves_the_old_files(tmp_path):
 
 @pytest.mark.parametrize("name", ["gyro_array_8", "undeclared_aux_lag", "paper_gyro_y"])
 def test_fosmodel_loader_reads_the_csv(tmp_path, name):
-    from fosmodel.loader import load_record
+    from fosmodel.io.loader import load_record
 
     rec = make_scenario(name, duration=30.0, seed=1)
     csv, _ = write_record(rec, tmp_path / "r.csv")

@@ -12,7 +12,7 @@ from scipy.signal import lfilter
 from data_synth import list_scenarios, make_scenario
 from data_synth.scenarios import SCENARIOS
 from data_synth.terms import evaluate
-from fosmodel.exceptions import InputError
+from fosmodel.core.exceptions import InputError
 
 Z = 4.5
 REQUIRED = {

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from data_synth.terms import Representation, add_term, evaluate, exact_model, shift, terms_json
-from fosmodel.candidates import Term
-from fosmodel.exceptions import InputError
+from fosmodel.core.candidates import Term
+from fosmodel.core.exceptions import InputError
 
 
 @pytest.mark.parametrize(
@@ -97,7 +97,7 @@ def test_evaluate_computes_lagged_products():
 
 def test_truth_terms_are_fosmodel_term_names():
     from data_synth.scenarios import SCENARIOS, make_scenario
-    from fosmodel.candidates import Term
+    from fosmodel.core.candidates import Term
 
     names = set()
     for scenario in SCENARIOS:

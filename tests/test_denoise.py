@@ -5,7 +5,7 @@ import pytest
 from scipy.signal import freqz
 
 from fosmodel import InputError
-from fosmodel.denoise import (
+from fosmodel.noise.denoise import (
     DENOISERS,
     denoise,
     kaiser_lowpass,

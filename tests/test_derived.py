@@ -1,11 +1,11 @@
-"""Columns rebuilt from their names (fosmodel.derived), and models that rebuild them."""
+"""Columns rebuilt from their names (fosmodel.core.derived), and models that rebuild them."""
 
 import numpy as np
 import pytest
 from scipy.signal import lfilter
 
 from fosmodel import FOSModel
-from fosmodel.derived import (
+from fosmodel.core.derived import (
     channels_read,
     cosine_name,
     derive,
@@ -14,8 +14,8 @@ from fosmodel.derived import (
     is_derived,
     step_name,
 )
-from fosmodel.exceptions import InputError
-from fosmodel.levels import level_series
+from fosmodel.core.exceptions import InputError
+from fosmodel.core.levels import level_series
 
 RATE, N = 50.0, 4000
 T = np.arange(N) / RATE

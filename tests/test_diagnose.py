@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter, lombscargle
 
-from fosmodel import diagnose as dg
-from fosmodel.fos import fos
+from fosmodel.core.fos import fos
+from fosmodel.loop import diagnose as dg
 
 RATE = 100.0
 

@@ -10,11 +10,12 @@ import pytest
 from scipy.signal import lfilter
 from threadpoolctl import threadpool_info
 
-from fosmodel import cli, harness
-from fosmodel.distributed import WORKER_ENV, connect, local_client
-from fosmodel.exceptions import InputError
-from fosmodel.harness import StudyConfig, plan_study
-from fosmodel.runner import run_studies, run_study
+from fosmodel import cli
+from fosmodel.core.exceptions import InputError
+from fosmodel.study import harness
+from fosmodel.study.distributed import WORKER_ENV, connect, local_client
+from fosmodel.study.harness import StudyConfig, plan_study
+from fosmodel.study.runner import run_studies, run_study
 
 RATE = 10.0
 CONFIG = StudyConfig(rate=RATE, sensor="accel", units="m/s^2", orders=(1, 2, 3), degrees=(1, 2),

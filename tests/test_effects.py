@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from fosmodel.diagnose import Finding
-from fosmodel.effects import CandidateFamily, Effect, effects_from
-from fosmodel.levels import level_series
+from fosmodel.core.levels import level_series
+from fosmodel.loop.diagnose import Finding
+from fosmodel.loop.effects import CandidateFamily, Effect, effects_from
 
 RATE = 10.0
 N = 200
@@ -37,7 +37,7 @@ def test_each_kind_adds_its_candidates():
 
 
 def test_candidate_names_are_valid_fos_column_names():
-    from fosmodel.candidates import CandidateSpec
+    from fosmodel.core.candidates import CandidateSpec
 
     fam = CandidateFamily(2)
     for e in (Effect("aux", channel="temp_c", max_lag=1),

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from fosmodel.exceptions import InputError
-from fosmodel.fos import (
+from fosmodel.core.exceptions import InputError
+from fosmodel.core.fos import (
     StopRule,
     _DataCorrelations,
     _fos_kernel,

@@ -29,7 +29,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from fosmodel.fos import fos
+from fosmodel.core.fos import fos
 
 SETTINGS = settings(max_examples=100, deadline=None, derandomize=True)
 RTOL = 1e-8

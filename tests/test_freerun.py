@@ -1,10 +1,10 @@
-"""Free runs (fosmodel.freerun): many at once against the sample-by-sample reference."""
+"""Free runs (fosmodel.models.freerun): many at once against the sample-by-sample reference."""
 
 import numpy as np
 import pytest
 
-from fosmodel.candidates import Term
-from fosmodel.freerun import run_many, run_one, split_expansion
+from fosmodel.core.candidates import Term
+from fosmodel.models.freerun import run_many, run_one, split_expansion
 
 
 def _expansion(names, coef, levels=(), intercept=0.1):

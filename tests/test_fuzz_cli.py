@@ -32,8 +32,8 @@ import pytest
 from scipy.signal import lfilter
 
 from fosmodel import cli
-from fosmodel.loader import load_record
-from fosmodel.model import FOSModel
+from fosmodel.io.loader import load_record
+from fosmodel.models.model import FOSModel
 
 N_ROWS = 40
 HEADER = "time,gx,temp"

@@ -15,8 +15,8 @@ import pytest
 from scipy.signal import lfilter
 
 from fosmodel import FOSModel, FOSRegressor, cli, fos
-from fosmodel.exceptions import FitWarning, InputError
-from fosmodel.loader import load_record
+from fosmodel.core.exceptions import FitWarning, InputError
+from fosmodel.io.loader import load_record
 
 
 @pytest.fixture
@@ -147,9 +147,9 @@ def test_a_time_that_stands_still_fails_on_the_first_block(tmp_path, capsys):
 
 def test_a_backward_time_fails_in_its_block_with_its_line(tmp_path, monkeypatch):
     """Across a block boundary and inside a later block, the line named is the file's."""
-    monkeypatch.setattr("fosmodel.loader.CHUNK_ROWS", 1000)
+    monkeypatch.setattr("fosmodel.io.loader.CHUNK_ROWS", 1000)
     calls = []
-    monkeypatch.setattr("fosmodel.loader._check_finite",
+    monkeypatch.setattr("fosmodel.io.loader._check_finite",
                         lambda *a, **k: calls.append(a))  # reached only after every block
     for bad_row in (1000, 2500):  # the first row of block 2, and one inside block 3
         time = np.arange(5000) / 100.0
@@ -262,7 +262,7 @@ def test_an_interrupted_command_exits_130_and_writes_nothing(folder, capsys, mon
         calls.append(fd)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("fosmodel.output.os.fsync", interrupted)
+    monkeypatch.setattr("fosmodel.io.output.os.fsync", interrupted)
     if command == "demo":  # interrupt the demo's long first part at once
         monkeypatch.setattr("fosmodel.demo.run_paper_records",
                             lambda out: (_ for _ in ()).throw(KeyboardInterrupt))

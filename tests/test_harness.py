@@ -5,12 +5,12 @@ import pytest
 from scipy.signal import lfilter
 from statsmodels.tsa.arima_process import ArmaProcess
 
-from fosmodel import harness
-from fosmodel.denoise import denoise
-from fosmodel.dynamics import ar_free_run, ar_one_step
-from fosmodel.exceptions import InputError
-from fosmodel.harness import Split, StudyConfig
-from fosmodel.runner import run_study
+from fosmodel.core.exceptions import InputError
+from fosmodel.models.dynamics import ar_free_run, ar_one_step
+from fosmodel.noise.denoise import denoise
+from fosmodel.study import harness
+from fosmodel.study.harness import Split, StudyConfig
+from fosmodel.study.runner import run_study
 
 RATE = 10.0
 

@@ -6,9 +6,9 @@ import sys
 import pytest
 
 
-@pytest.mark.parametrize("module", ["fosmodel.allan", "fosmodel.imu_noise"])
+@pytest.mark.parametrize("module", ["fosmodel.noise.allan", "fosmodel.noise.imu_noise"])
 def test_the_allan_analysis_imports_neither_the_harness_nor_the_ar_estimators(module):
-    heavy = ("fosmodel.harness", "fosmodel.baselines", "statsmodels.tsa.ar_model")
+    heavy = ("fosmodel.study.harness", "fosmodel.models.baselines", "statsmodels.tsa.ar_model")
     code = f"import sys, {module}; print(sorted(m for m in {heavy!r} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout

@@ -12,8 +12,8 @@ import pytest
 import yaml
 
 from fosmodel import cli
-from fosmodel.exceptions import InputError
-from fosmodel.imu_noise import Axis, imu_noise, infer_axis, resolve_axes
+from fosmodel.core.exceptions import InputError
+from fosmodel.noise.imu_noise import Axis, imu_noise, infer_axis, resolve_axes
 
 RATE = 100.0
 N_SAMPLES = 200_000

@@ -5,9 +5,9 @@ import pytest
 from scipy.linalg import solve_discrete_are
 
 from fosmodel import InputError
-from fosmodel.baselines import ARModel
-from fosmodel.kalman import KalmanFilter, run_filter
-from fosmodel.statespace import position_velocity_error_model, to_state_space
+from fosmodel.filter.kalman import KalmanFilter, run_filter
+from fosmodel.filter.statespace import position_velocity_error_model, to_state_space
+from fosmodel.models.baselines import ARModel
 
 
 def test_random_walk_reaches_the_closed_form_riccati_solution():

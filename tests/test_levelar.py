@@ -1,13 +1,13 @@
-"""Baselines about the local level (fosmodel.levelar) against a hand-written recursion."""
+"""Baselines about the local level (fosmodel.models.levelar) against a hand-written recursion."""
 
 import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from fosmodel.baselines import ARModel, GaussMarkovModel
-from fosmodel.exceptions import InputError
-from fosmodel.levelar import LocalLevelAR
-from fosmodel.levels import level_series
+from fosmodel.core.exceptions import InputError
+from fosmodel.core.levels import level_series
+from fosmodel.models.baselines import ARModel, GaussMarkovModel
+from fosmodel.models.levelar import LocalLevelAR
 
 RATE, TAU = 100.0, 5.0
 

@@ -1,4 +1,4 @@
-"""Local-level candidates (fosmodel.levels) in FOSModel: fit, predict, free run, export."""
+"""Local-level candidates (fosmodel.core.levels) in FOSModel: fit, predict, free run, export."""
 
 import json
 
@@ -7,10 +7,10 @@ import pytest
 from scipy.signal import lfilter
 
 from fosmodel import CandidateSpec, FOSModel, Term, generate_terms
-from fosmodel.candidates import evaluate_terms
-from fosmodel.exceptions import InputError
-from fosmodel.levels import level_after, level_grid, level_name, level_series, level_tau
-from fosmodel.statespace import to_nonlinear_state_space, to_state_space
+from fosmodel.core.candidates import evaluate_terms
+from fosmodel.core.exceptions import InputError
+from fosmodel.core.levels import level_after, level_grid, level_name, level_series, level_tau
+from fosmodel.filter.statespace import to_nonlinear_state_space, to_state_space
 
 RATE = 100.0
 

@@ -5,9 +5,9 @@ import pandas as pd
 import pytest
 from records import bursty_csv, spiky_csv
 
-from fosmodel import loader
-from fosmodel.exceptions import InputError
-from fosmodel.loader import load_record, parse_scales
+from fosmodel.core.exceptions import InputError
+from fosmodel.io import loader
+from fosmodel.io.loader import load_record, parse_scales
 
 
 def _csv(tmp_path, text, name="rec.csv"):

@@ -3,8 +3,8 @@
 import numpy as np
 from scipy.signal import lfilter
 
-from fosmodel.closeloop import LoopConfig, close_loop, worse_metrics
-from fosmodel.loop_report import effects_table, evaluation_text, report_markdown
+from fosmodel.loop.closeloop import LoopConfig, close_loop, worse_metrics
+from fosmodel.loop.loop_report import effects_table, evaluation_text, report_markdown
 
 
 def _evaluation(judged, origins=None):

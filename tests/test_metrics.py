@@ -5,7 +5,7 @@ import pytest
 from scipy.signal import lfilter
 
 from fosmodel import FOSModel, InputError
-from fosmodel.metrics import (
+from fosmodel.noise.metrics import (
     PAPER_GRAVITY,
     STANDARD_GRAVITY,
     bias_rms,

@@ -9,7 +9,7 @@ from narx import narx
 from scipy.signal import lfilter
 
 from fosmodel import FOSModel, InputError, Term, UnstableModelWarning
-from fosmodel.candidates import evaluate_terms
+from fosmodel.core.candidates import evaluate_terms
 
 # -- exact recovery on known NARX models (greedy-identifiable designs, SNR >= 20 dB) --------
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from fosmodel.exceptions import InputError
-from fosmodel.output import (
+from fosmodel.core.exceptions import InputError
+from fosmodel.io.output import (
     atomic_write,
     publish,
     refuse_overwrite,
@@ -133,7 +133,7 @@ def test_new_files_follow_the_umask(tmp_path):
 
 _WRITER = """
 import sys
-from fosmodel.output import write_text
+from fosmodel.io.output import write_text
 path, n = sys.argv[1], int(sys.argv[2])
 for i in range(n):
     write_text(path, str(i) * 200_000)

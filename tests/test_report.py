@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from fosmodel.harness import StudyConfig
-from fosmodel.report import level_table, paper_table, study_table, write_study
-from fosmodel.runner import run_study
+from fosmodel.study.harness import StudyConfig
+from fosmodel.study.report import level_table, paper_table, study_table, write_study
+from fosmodel.study.runner import run_study
 
 
 @pytest.fixture(scope="module")

@@ -1,9 +1,9 @@
-"""The real recording bundled with the package (fosmodel.samples)."""
+"""The real recording bundled with the package (fosmodel.io.samples)."""
 
 import numpy as np
 import pytest
 
-from fosmodel import samples
+from fosmodel.io import samples
 
 
 def test_bundled_mpu6050_recording():

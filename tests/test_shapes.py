@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from fosmodel.candidates import CandidateSpec, evaluate_terms, generate_terms
-from fosmodel.correlations import LagCorrelations
-from fosmodel.fos import _DataCorrelations
-from fosmodel.shapes import Geometry, direct_groups, layout, lookup, plan_batch
+from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
+from fosmodel.core.correlations import LagCorrelations
+from fosmodel.core.fos import _DataCorrelations
+from fosmodel.core.shapes import Geometry, direct_groups, layout, lookup, plan_batch
 
 
 def _rows(*products):

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fosmodel.exceptions import InputError
-from fosmodel.loader import load_record
-from fosmodel.samples import MPU6050_SCALE, mpu6050_static_path
+from fosmodel.core.exceptions import InputError
+from fosmodel.io.loader import load_record
+from fosmodel.io.samples import MPU6050_SCALE, mpu6050_static_path
 
 DATA = Path(__file__).parents[2] / "shared" / "data"
 pytestmark = pytest.mark.skipif(

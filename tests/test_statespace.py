@@ -9,14 +9,14 @@ from statsmodels.tsa.arima_process import arma_acf, arma_acovf
 from statsmodels.tsa.stattools import acf
 
 from fosmodel import FOSModel, InputError
-from fosmodel.baselines import ARModel, GaussMarkovModel
-from fosmodel.statespace import (
+from fosmodel.filter.statespace import (
     NonlinearStateSpace,
     StateSpace,
     position_velocity_error_model,
     to_nonlinear_state_space,
     to_state_space,
 )
+from fosmodel.models.baselines import ARModel, GaussMarkovModel
 
 RNG = np.random.default_rng(11)
 AR2 = lfilter([1.0], [1.0, -1.5, 0.7], RNG.standard_normal(20_000)) + 3.0

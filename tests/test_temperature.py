@@ -1,4 +1,4 @@
-"""Temperature-dependent models of chamber records (fosmodel.temperature)."""
+"""Temperature-dependent models of chamber records (fosmodel.study.temperature)."""
 
 import math
 
@@ -12,7 +12,7 @@ from data_synth import StepProfile, TemperatureBias, WhiteNoise, compose, make_s
 from data_synth.profiles import CHAMBER_LEVELS_C
 from data_synth.scenarios import CC300_GYRO_ARW, CC300_TEMPS_C
 from fosmodel import FOSModel, InputError
-from fosmodel.temperature import (
+from fosmodel.study.temperature import (
     TableModel,
     held_out_comparison,
     segment_noise,

@@ -4,8 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fosmodel.exceptions import InputError
-from fosmodel.validation import as_signal
+from fosmodel.core.exceptions import InputError
+from fosmodel.core.validation import as_signal
 
 
 def test_as_signal_takes_arrays_lists_and_series():

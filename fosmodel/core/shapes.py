@@ -1,0 +1,295 @@
+"""Shapes of lagged products and the data-free plan of a batch of moments.
+
+A moment is the window mean of a product of lagged signals, given row-wise by
+(channel, lag) pairs (channel -1: no factor).  Shifting its lags by the row's
+smallest lag ``lmin`` gives its *shape*; :class:`Geometry` encodes shapes as
+integer keys.  :func:`plan_batch` decides which rows of a batch come from the
+shape tables of :class:`fosmodel.core.correlations.LagCorrelations` and which new
+shapes the batch adds to them.  None of this depends on the data, so the plan
+of the batch every fit starts with is made once per candidate set
+(:func:`layout`) and reused by later fits, like an FFT plan.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from .candidates import OUTPUT, Factor
+
+_BLOCK = 8192  # most moments in the Gram columns of linear candidates tabulated at once
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """How shapes over ``n_channels`` signals and lags ``0..n0`` are encoded.
+
+    A factor (channel c, lag shift r) has the code ``c * (n0 + 1) + r + 1``;
+    0 is an absent factor.  A shape's key is its sorted codes in base
+    ``n_channels * (n0 + 1) + 1``, with as many digits as fit in an int64
+    (at least ``table_degree``).
+    """
+
+    n0: int
+    n_channels: int
+    width: int  # most factors in a row
+    table_degree: int
+    radix: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        base, digits = self.n_channels * self.stride + 1, self.width
+        while digits > self.table_degree and base**digits >= 2**62:
+            digits -= 1
+        object.__setattr__(self, "radix", base ** np.arange(max(digits, 1), dtype=np.int64))
+
+    @property
+    def stride(self) -> int:
+        return self.n0 + 1
+
+    def shape_keys(self, ch, lag, present, lmin) -> tuple[np.ndarray, np.ndarray]:
+        """Integer key of each row's shape (negative where it has too many factors to
+        encode) and the row's sorted codes (absent factors first)."""
+        code = ch * self.stride + (lag - lmin[:, None] + 1)
+        code[~present] = 0
+        code.sort(axis=1)
+        width = len(self.radix)
+        if code.shape[1] <= width:
+            return code @ self.radix[width - code.shape[1] :], code
+        fits = ~code[:, :-width].any(axis=1)
+        code = code[:, -width:]
+        return np.where(fits, code @ self.radix, -1 - np.arange(len(code))), code
+
+    def group_by_prefix(self, codes: np.ndarray) -> dict[tuple, dict[tuple, tuple]]:
+        """Shapes grouped by their factors but the last (its square if it repeats), then by
+        the last factor's channel and power: ``{prefix: {(ch, k): (rows, rels)}}``.
+
+        A prefix is a tuple of ``(channel, lag shift)`` factors; ``rels`` are the
+        last factor's lag shifts, ascending; channel -1 is the empty product.
+        """
+        width = codes.shape[1]
+        last = codes[:, -1]
+        power = np.ones(len(codes), dtype=np.int64)
+        if width > 1:
+            power += (codes[:, -2] == last) & (last > 0)
+        prefix = codes.copy()
+        prefix[:, -1] = 0
+        prefix[power == 2, -2] = 0
+        prefix.sort(axis=1)
+        ch, rel = np.divmod(last - 1, self.stride)
+        ch[last == 0] = -1
+        key = np.stack([prefix @ self.radix[len(self.radix) - width :], ch, power])
+        order = np.lexsort((rel, *key[::-1]))  # lags ascending within a group
+        bounds = np.flatnonzero((np.diff(key[:, order], axis=1) != 0).any(axis=0)) + 1
+        groups: dict[tuple, dict[tuple, tuple]] = {}
+        for rows in np.split(order, bounds):
+            i = rows[0]
+            name = tuple(divmod(c - 1, self.stride) for c in prefix[i].tolist() if c)
+            groups.setdefault(name, {})[(int(ch[i]), int(power[i]))] = (rows, rel[rows])
+        return groups
+
+    def factor_index(self, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(channel, lag shift) of every code; an absent factor is channel ``n_channels``
+        (the ones of the edge tables) at shift 0."""
+        ch, rel = np.divmod(codes - 1, self.stride)
+        ch[codes == 0], rel[codes == 0] = self.n_channels, 0
+        return ch, rel
+
+
+def lookup(keys: np.ndarray, table_keys: np.ndarray, table_slots: np.ndarray) -> np.ndarray:
+    """Table row of each shape key, -1 where not tabulated (``table_keys`` sorted)."""
+    if not len(table_keys):
+        return np.full(len(keys), -1, dtype=np.intp)
+    pos = np.minimum(np.searchsorted(table_keys, keys), len(table_keys) - 1)
+    return np.where(table_keys[pos] == keys, table_slots[pos], -1)
+
+
+@dataclass(frozen=True)
+class NewShapes:
+    """Shapes a batch adds to the tables, as rows ``base, base + 1, ...``."""
+
+    groups: dict  # Geometry.group_by_prefix of their codes
+    ch: np.ndarray  # Geometry.factor_index of their codes
+    rel: np.ndarray
+
+
+@dataclass(frozen=True)
+class Batch:
+    """The plan of one batch of moments against the tables as they were before it."""
+
+    lmin: np.ndarray  # each row's smallest lag
+    table: np.ndarray  # rows read from the tables (the others are summed directly)
+    slot: np.ndarray  # table row of each row read from the tables
+    new: NewShapes | None
+    keys: np.ndarray  # tabulated shape keys after the batch, sorted
+    slots: np.ndarray  # their table rows
+
+
+def plan_batch(geo: Geometry, ch, lag, lmin, table_keys, table_slots) -> Batch:
+    """Which rows come from the tables, and which shapes the batch tabulates first.
+
+    A product comes from the tables if its degree is at most
+    ``geo.table_degree``, or if its shape is already tabulated or repeats
+    within the batch; otherwise it is summed directly.
+    """
+    present = ch >= 0
+    degree = present.sum(axis=1)
+    if lmin is None:
+        lmin = np.where(present, lag, geo.n0).min(axis=1)
+    keys, codes = geo.shape_keys(ch, lag, present, lmin)
+    slot = lookup(keys, table_keys, table_slots)
+    table = slot >= 0
+    new = None
+    if not table.all():
+        table |= degree <= geo.table_degree
+        maybe = ~table & (degree <= len(geo.radix))
+        if maybe.any():  # tabulate a high-degree shape only if it serves several products
+            uniq, counts = np.unique(keys[maybe], return_counts=True)
+            table |= np.isin(keys, uniq[counts > 1])
+        fresh = table & (slot < 0)
+        if fresh.any():
+            uniq, first = np.unique(keys[fresh], return_index=True)
+            codes = codes[fresh][first]
+            new = NewShapes(geo.group_by_prefix(codes), *geo.factor_index(codes))
+            base = len(table_keys)
+            all_keys = np.concatenate([table_keys, uniq])
+            all_slots = np.concatenate([table_slots, base + np.arange(len(uniq))])
+            order = np.argsort(all_keys, kind="stable")
+            table_keys, table_slots = all_keys[order], all_slots[order]
+            slot = lookup(keys, table_keys, table_slots)
+    return Batch(lmin, table, slot[table], new, table_keys, table_slots)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Everything about a candidate set's correlations that does not depend on the data.
+
+    ``ch``, ``lag``: the candidates' factors, one row each (channel index into
+    ``names``, -1 for none); ``first``: the plan of the batch a fit starts
+    with, whose rows are ``rows`` (see :func:`layout`); ``linear``: the linear
+    candidates whose Gram columns that batch includes.
+    """
+
+    names: tuple[str, ...]
+    geometry: Geometry
+    ch: np.ndarray
+    lag: np.ndarray
+    lmin: np.ndarray
+    linear: np.ndarray
+    rows: tuple[np.ndarray, np.ndarray]
+    first: Batch
+
+
+@lru_cache(maxsize=16)
+def layout(factors: tuple[tuple[Factor, ...], ...], n0: int, table_degree: int) -> Layout:
+    """The layout of the candidates with these factors (one tuple per candidate).
+
+    The first batch holds, in order: mean(y), mean(y^2), mean(p_c), mean(y
+    p_c), mean(p_c^2) for every candidate c, then the Gram columns of the
+    linear candidates when they are few (see :func:`_linear_rows`).  Cached:
+    fits of one candidate set share it (its arrays are read-only).
+    """
+    names = (OUTPUT, *sorted({ch for fs in factors for ch, _ in fs} - {OUTPUT}))
+    index = {ch: i for i, ch in enumerate(names)}
+    width = max([len(fs) for fs in factors] + [1])
+    k = len(factors)
+    ch = np.full((k, width), -1, dtype=np.int64)
+    lag = np.zeros((k, width), dtype=np.int64)
+    for i, fs in enumerate(factors):
+        for j, (name, lg) in enumerate(fs):
+            ch[i, j], lag[i, j] = index[name], lg or 0
+    geo = Geometry(n0, len(names), 2 * width, table_degree)
+    linear, ch_lin, lag_lin = _linear_rows(ch, lag, table_degree)
+    ch0 = np.full((2 + 3 * k + len(ch_lin), 2 * width), -1, dtype=np.int64)
+    lag0 = np.zeros_like(ch0)
+    ch0[0, 0] = ch0[1, :2] = 0  # y is channel 0 at lag 0
+    for i in range(3):
+        block = slice(2 + i * k, 2 + (i + 1) * k)
+        ch0[block, :width], lag0[block, :width] = ch, lag
+    ch0[2 + k : 2 + 2 * k, width] = 0
+    ch0[2 + 2 * k : 2 + 3 * k, width:], lag0[2 + 2 * k : 2 + 3 * k, width:] = ch, lag
+    ch0[2 + 3 * k :, : width + 1], lag0[2 + 3 * k :, : width + 1] = ch_lin, lag_lin
+    empty_keys, empty_slots = np.empty(0, dtype=np.int64), np.empty(0, dtype=np.intp)
+    first = plan_batch(geo, ch0, lag0, None, empty_keys, empty_slots)
+    lmin = np.where(ch >= 0, lag, n0).min(axis=1)
+    out = Layout(names, geo, ch, lag, lmin, linear, (ch0, lag0), first)
+    for a in (ch, lag, lmin, linear, ch0, lag0, *_arrays(first)):
+        a.flags.writeable = False
+    return out
+
+
+def _arrays(batch: Batch) -> list[np.ndarray]:
+    arrays = [batch.lmin, batch.table, batch.slot, batch.keys, batch.slots]
+    if batch.new is not None:
+        arrays += [batch.new.ch, batch.new.rel]
+    return arrays
+
+
+def _linear_rows(ch: np.ndarray, lag: np.ndarray, table_degree: int):
+    """The linear candidates whose Gram columns are tabulated at once, and their rows.
+
+    A linear candidate's column holds moments of degree at most width + 1,
+    all table lookups when that is within ``table_degree``; while all those
+    columns hold at most ``_BLOCK`` moments, one batch costs less than a call
+    per search step (measured up to L = 50 at CP = 1 and L = 20 at CP = 2,
+    even when the search selects a few of them).  With more, the search
+    fetches the columns it needs.  Returns the candidates' indices and the
+    (channel, lag) rows of their columns, ``width + 1`` factors each.
+    """
+    k, width = ch.shape
+    linear = np.flatnonzero((ch >= 0).sum(axis=1) == 1)
+    if width + 1 > table_degree or not 0 < len(linear) * k <= _BLOCK:
+        empty = np.empty((0, width + 1), dtype=np.int64)
+        return linear[:0], empty, empty
+    rows_ch = np.empty((len(linear) * k, width + 1), dtype=np.int64)
+    rows_lag = np.empty_like(rows_ch)
+    rows_ch[:, :width] = np.tile(ch, (len(linear), 1))
+    rows_lag[:, :width] = np.tile(lag, (len(linear), 1))
+    rows_ch[:, width] = np.repeat(ch[linear, 0], k)
+    rows_lag[:, width] = np.repeat(lag[linear, 0], k)
+    return linear, rows_ch, rows_lag
+
+
+def direct_groups(ch: np.ndarray, lag: np.ndarray) -> dict[tuple, dict[tuple, tuple]]:
+    """Rows summed directly, grouped as :meth:`Geometry.group_by_prefix` groups shapes.
+
+    ``{prefix: {(ch, k): (rows, lags)}}``: a row's sorted factors (channel,
+    lag) but the last (its square, ``k = 2``, if it repeats) form the prefix;
+    ``lags`` are the last factor's lags, ascending; channel -1 is the empty
+    product.  Unlike shapes, these rows may be too wide to encode as keys,
+    so they are grouped by their factors.  Cached: a Gram column's directly
+    summed rows are the same in every fit of a candidate set (read-only).
+    """
+    ch, lag = np.asarray(ch, dtype=np.int64), np.asarray(lag, dtype=np.int64)
+    return _direct_groups(ch.tobytes(), lag.tobytes(), ch.shape)
+
+
+@lru_cache(maxsize=4096)
+def _direct_groups(ch_bytes: bytes, lag_bytes: bytes, shape: tuple[int, int]) -> dict:
+    ch = np.frombuffer(ch_bytes, dtype=np.int64).reshape(shape)
+    lag = np.frombuffer(lag_bytes, dtype=np.int64).reshape(shape)
+    groups: dict[tuple, dict[tuple, tuple[list, list]]] = {}
+    for i, (r_ch, r_lag) in enumerate(zip(ch.tolist(), lag.tolist())):
+        row = sorted((c, g) for c, g in zip(r_ch, r_lag) if c >= 0)
+        k = 2 if len(row) > 1 and row[-2] == row[-1] else 1
+        c, g = row[-1] if row else (-1, 0)
+        rows, lags = groups.setdefault(tuple(row[:-k]), {}).setdefault((c, k), ([], []))
+        rows.append(i)
+        lags.append(g)
+    out: dict[tuple, dict[tuple, tuple]] = {}
+    for prefix, by_last in groups.items():
+        out[prefix] = {}
+        for key, (rows, lags) in by_last.items():
+            order = np.argsort(lags, kind="stable")
+            pair = np.asarray(rows, dtype=np.intp)[order], np.asarray(lags, dtype=np.int64)[order]
+            for a in pair:
+                a.flags.writeable = False
+            out[prefix][key] = pair
+    return out
+
+
+def clear_plans() -> None:
+    """Forget the cached layouts and direct groups (to time a first fit, as benchmarks do)."""
+    layout.cache_clear()
+    _direct_groups.cache_clear()

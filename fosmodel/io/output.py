@@ -1,0 +1,228 @@
+"""Safe file output: never over an input, and either the old version or the complete new one.
+
+Every file fosmodel writes goes through :func:`atomic_write`: the content is
+written to a temporary file in the destination directory and renamed over the
+destination, so an interrupted run never leaves a half-written result.  The
+temporary file's name carries the writer's process id: one left behind by a
+killed run is removed by the next write to the same destination.  A report
+directory is written beside its destination and moved into place in one step
+(:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
+that no output names a file the command reads, however the two are spelt.
+:func:`write_tables` and :func:`save_figure` write a table (Markdown, CSV,
+LaTeX) and a figure (PNG, SVG) that way.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import shutil
+import uuid
+from collections.abc import Iterable, Iterator, Mapping
+from pathlib import Path
+from typing import IO, TYPE_CHECKING
+
+from ..core.exceptions import InputError
+from ..models.summary import markdown_table
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+Paths = Mapping[str, "str | os.PathLike[str] | None"]
+
+
+def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether two paths name one file: through symlinks, hard links and relative spellings."""
+    a, b = Path(a), Path(b)
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)  # hard links: the same device and inode
+    except OSError:  # one of them does not exist (yet)
+        return False
+
+
+def refuse_overwrite(outputs: Paths, inputs: Paths) -> None:
+    """Refuse outputs that would replace an input, or each other.
+
+    Parameters
+    ----------
+    outputs, inputs : mapping of a label (``"--out"``, ``"the record"``) to a path
+        None values are skipped.
+
+    Raises
+    ------
+    InputError
+        An output names the same file as an input or as another output.
+    """
+    outs = [(k, v) for k, v in outputs.items() if v is not None]
+    ins = [(k, v) for k, v in inputs.items() if v is not None]
+    for label, path in outs:
+        for what, source in ins:
+            if same_file(path, source):
+                raise InputError(f"{label} {path} is {what} {source}: fosmodel never writes over "
+                                 "a file it reads; choose another output name")
+    for i, (label, path) in enumerate(outs):
+        for other, second in outs[i + 1:]:
+            if same_file(path, second):
+                raise InputError(f"{label} {path} and {other} {second} name the same file; "
+                                 "give each output its own name")
+
+
+def _temporary_name(path: Path, suffix: str) -> Path:
+    return path.parent / f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}{suffix}"
+
+
+def _stale(path: Path, suffix: str) -> Iterator[Path]:
+    """Temporary files or directories for ``path`` whose writer is no longer running."""
+    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(\d+)\.[0-9a-f]{{12}}{re.escape(suffix)}$")
+    with contextlib.suppress(OSError):
+        for item in path.parent.iterdir():
+            m = pattern.match(item.name)
+            if m and not _alive(int(m.group(1))):
+                yield item
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def _remove(item: Path) -> None:
+    if item.is_dir() and not item.is_symlink():
+        shutil.rmtree(item, ignore_errors=True)
+    else:
+        with contextlib.suppress(FileNotFoundError):
+            item.unlink()
+
+
+@contextlib.contextmanager
+def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
+    """Open a temporary file beside ``path``; rename it onto ``path`` on success.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination.  Its directory must exist.
+    mode : {"w", "wb"}
+        Text or binary mode.
+
+    Yields
+    ------
+    file object
+        Write the content to it.  If the body raises, the temporary file is
+        removed and ``path`` is left untouched.
+    """
+    if mode not in ("w", "wb"):
+        raise ValueError(f"mode must be 'w' or 'wb', not {mode!r}")
+    path = Path(path)
+    for item in _stale(path, ".tmp"):  # left behind by a killed run
+        _remove(item)
+    tmp = _temporary_name(path, ".tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
+    try:
+        text = {"encoding": "utf-8", "newline": ""} if mode == "w" else {}
+        with os.fdopen(fd, mode, **text) as fh:
+            yield fh
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` atomically (UTF-8)."""
+    with atomic_write(path, "w") as fh:
+        fh.write(text)
+
+
+def _mode() -> int:
+    """The permission bits of a new file under the process's umask (0666 & ~umask)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+@contextlib.contextmanager
+def report_directory(out: str | os.PathLike[str],
+                     protected: Iterable[str | os.PathLike[str]] = ()) -> Iterator[Path]:
+    """A fresh directory to write a report into, published onto ``out`` on success.
+
+    The directory is created beside ``out``; when the body returns, every file
+    in it is checked against ``protected`` (the inputs) and the whole is moved
+    onto ``out`` (renamed, or its files moved into an existing ``out``).  If
+    the body raises, or a file would replace an input, nothing of ``out``
+    changes and the directory is removed.
+    """
+    out = Path(out)
+    base = out.parent
+    while not base.is_dir():  # beside out, or in its nearest existing ancestor
+        base = base.parent
+    target = base / out.name
+    for item in _stale(target, ".tmpdir"):
+        _remove(item)
+    tmp = _temporary_name(target, ".tmpdir")
+    tmp.mkdir()
+    try:
+        yield tmp
+        publish(tmp, out, protected)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def publish(tmp: Path, out: Path, protected: Iterable[str | os.PathLike[str]] = ()) -> None:
+    """Move the files of ``tmp`` onto ``out``, after checking none replaces a ``protected``
+    file (InputError naming it; nothing moved)."""
+    protected = list(protected)
+    for item in tmp.rglob("*"):
+        target = out / item.relative_to(tmp)
+        for source in protected:
+            if target.exists() and same_file(target, source):
+                raise InputError(f"writing the report into {out} would replace {source}, a "
+                                 "file this command reads; choose another output directory")
+    _move(tmp, out)
+
+
+def _move(tmp: Path, out: Path) -> None:
+    if out.is_dir():
+        for item in tmp.iterdir():
+            target = out / item.name
+            if item.is_dir() and target.is_dir():
+                _move(item, target)
+            else:
+                os.replace(item, target)
+    else:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        os.replace(tmp, out)
+
+
+def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
+    """``stem.md``, ``stem.csv`` and ``stem.tex`` in ``out_dir``, each written atomically."""
+    paths = [out_dir / f"{stem}.{ext}" for ext in ("md", "csv", "tex")]
+    write_text(paths[0], markdown_table(frame, digits=4) + "\n")
+    write_text(paths[1], frame.to_csv(index=False))
+    write_text(paths[2], frame.to_latex(index=False, float_format="%.4g", na_rep="--"))
+    return paths
+
+
+def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
+    """``stem.png`` and ``stem.svg`` in ``out_dir``, each written atomically."""
+    paths = []
+    for ext in ("png", "svg"):
+        path = out_dir / f"{stem}.{ext}"
+        with atomic_write(path, "wb") as fh:
+            fig.savefig(fh, format=ext, dpi=120)
+        paths.append(path)
+    return paths

@@ -1,0 +1,457 @@
+"""Residual diagnostics: what a fitted model left behind, one statistical test at a time.
+
+Every test returns a :class:`Finding`: its statistic, a p-value (with the
+multiple comparisons made inside the test accounted for, by Bonferroni), the
+level it is compared with, the evidence a user needs to act on it, and the
+arrays of its figure.  The residual passed in is the one-step residual of the
+current model over the samples it may look at (never the prediction segment).
+
+=============  ==============================================================  ============
+test           statistic                                                       points to
+=============  ==============================================================  ============
+whiteness      Ljung-Box Q (statsmodels)                                        (nothing)
+periodic       least-squares spectrum peak over its local level, refined by     periodic
+               a FOS search over sinusoids between the FFT bins
+aux            cross-correlation with each other channel and its square,       aux
+               lags 0..K, Bartlett variance
+nonlinear      F test of lagged-output squares and cross-products (RESET)      nonlinear
+trend          F test of a polynomial / exponential warm-up in time            drift
+step           CUSUM against the Brownian bridge (Kolmogorov), long-run var    step
+allan          Allan deviation at long tau over its white-noise value (chi2)   (nothing)
+=============  ==============================================================  ============
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import allantools
+import numpy as np
+from scipy import stats
+from scipy.ndimage import median_filter
+from scipy.signal import zoom_fft
+
+from ..core.fos import StopRule, _fos_kernel
+
+ALPHA = 1e-3
+
+
+@dataclass
+class Finding:
+    """The outcome of one diagnostic test.
+
+    Attributes
+    ----------
+    test : str
+        Name of the test (``whiteness``, ``periodic``, ``aux``, ``nonlinear``, ``trend``,
+        ``step``, ``allan``).
+    statistic, p_value : float
+        The test statistic and its p-value, corrected for the comparisons inside the test.
+    alpha : float
+        The level the p-value is compared with.
+    evidence : dict
+        JSON-serialisable details (frequency, channel and lag, form of a trend...).
+    plot : dict
+        Arrays for the test's figure.
+    """
+
+    test: str
+    statistic: float
+    p_value: float
+    alpha: float
+    evidence: dict
+    plot: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def fired(self) -> bool:
+        return bool(self.p_value < self.alpha)
+
+    def to_dict(self) -> dict:
+        return {"test": self.test, "statistic": float(self.statistic),
+                "p_value": float(self.p_value), "alpha": self.alpha, "fired": self.fired,
+                "evidence": self.evidence}
+
+
+def _bonferroni(p: float, count: int) -> float:
+    return float(min(1.0, p * count))
+
+
+# -- whiteness ------------------------------------------------------------------------------
+
+
+def autocorrelation(x: np.ndarray, nlags: int) -> np.ndarray:
+    """Sample autocorrelation at lags ``0 .. nlags`` (mean removed, sums over N), as
+    statsmodels' ``acf`` defines it, by one dot product per lag: for the few lags the
+    tests read this beats an FFT of a long record several times."""
+    xc = np.asarray(x, dtype=float) - np.mean(x)
+    n = len(xc)
+    c0 = float(xc @ xc)
+    if c0 == 0:
+        return np.r_[1.0, np.zeros(nlags)]
+    return np.array([1.0] + [float(xc[k:] @ xc[: n - k]) / c0 for k in range(1, nlags + 1)])
+
+
+
+def whiteness(residual: np.ndarray, lags: int = 20, alpha: float = ALPHA) -> Finding:
+    """Ljung-Box test over ``lags`` lags, with the residual ACF against its 95 % band.
+
+    ``Q = N (N + 2) sum_k rho_k^2 / (N - k)`` against chi2(lags), as statsmodels'
+    ``acorr_ljungbox`` computes it, but from the FFT autocorrelation: its own
+    uses a direct correlation, O(N^2), minutes on a record of a million samples.
+    """
+    n = len(residual)
+    nlags = int(min(100, n // 4))
+    rho = autocorrelation(residual, max(nlags, lags))
+    k = np.arange(1, lags + 1)
+    q = float(n * (n + 2) * np.sum(rho[k] ** 2 / (n - k)))
+    return Finding("whiteness", q, float(stats.chi2.sf(q, lags)), alpha, {"lags": lags},
+                   {"acf": rho[: nlags + 1], "band": 1.96 / math.sqrt(n)})
+
+
+# -- periodic content -----------------------------------------------------------------------
+
+
+def least_squares_spectrum(x: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """Fraction of the variance explained by a sinusoid at each Fourier frequency (seed 001 eq. 11).
+
+    For equally spaced samples the sinusoids at the Fourier frequencies ``k/T``
+    are orthogonal to the mean and to each other, so the least-squares (Lomb-
+    Scargle, floating mean) spectrum there is the normalised periodogram,
+    ``2 |X_k|^2 / (N sum (x - mean)^2)``, computed by FFT.  (scipy's
+    ``lombscargle(..., normalize=True, floating_mean=True)`` gives the same
+    values; it costs N x M trigonometric evaluations.)
+    """
+    xc = x - x.mean()
+    n = len(xc)
+    k = np.arange(1, (n - 1) // 2 + 1)
+    power = np.abs(np.fft.rfft(xc)[k]) ** 2
+    return k * rate / n, 2.0 * power / (n * float(xc @ xc))
+
+
+def periodic(
+    residual: np.ndarray, time: np.ndarray, rate: float, alpha: float = ALPHA,
+    fmin_hz: float | None = None, window: int = 101,
+) -> Finding:
+    """The strongest spectral peak against the local level of the spectrum.
+
+    Under a locally white residual, ``s_k / (local median / ln 2)`` is a unit
+    exponential variable, so a peak's false-alarm probability over the ``M``
+    frequencies tested is ``1 - (1 - exp(-z))^M``.  Frequencies below
+    ``fmin_hz`` (default: 5 FFT bins) are left to the trend tests.  The peak's
+    frequency is refined between the bins by :func:`refine_frequency`.
+    """
+    freqs, s = least_squares_spectrum(residual, rate)
+    fmin = 5 * rate / len(residual) if fmin_hz is None else fmin_hz
+    level = median_filter(s, size=window, mode="mirror") / math.log(2.0)  # not "nearest": it
+    # would fill the edge windows with copies of one value
+    z = np.where(freqs >= fmin, s / level, 0.0)
+    k = int(np.argmax(z))
+    m = int(np.count_nonzero(freqs >= fmin))
+    fap = float(-np.expm1(m * np.log1p(-math.exp(-z[k])))) if z[k] > 0 else 1.0
+    f_hat = refine_frequency(residual, time, float(freqs[k]), rate)
+    amplitude = math.sqrt(2.0 * s[k] * float(np.var(residual)))
+    threshold = level * math.log(m / alpha) if m else level
+    return Finding("periodic", float(z[k]), fap, alpha,
+                   {"freq_hz": f_hat, "freq_fft_hz": float(freqs[k]), "power": float(s[k]),
+                    "amplitude": amplitude},
+                   {"freqs": freqs, "spectrum": s, "threshold": threshold})
+
+
+def refine_frequency(
+    x: np.ndarray, time: np.ndarray, f0: float, rate: float, span_bins: float = 1.0,
+    step_bins: float = 0.02, phases: int = 16,
+) -> float:
+    """The frequency near ``f0`` of the single sinusoid FOS selects first.
+
+    The candidates are ``cos(2 pi f t + phi)`` for ``f`` within ``span_bins``
+    FFT bins of ``f0`` in steps of ``step_bins`` bins and ``phases`` phases in
+    [0, pi): one term can then match a sinusoid's frequency and phase, which a
+    cosine or a sine alone at a nearby frequency would trade against each
+    other.  Their means and mean products are geometric sums in closed form
+    (:class:`_SinusoidCorrelations`); their correlations with ``x`` come from
+    one zoom FFT (chirp z-transform) over the evenly spaced grid.
+    """
+    n = len(x)
+    grid = f0 + np.arange(-span_bins, span_bins + step_bins / 2, step_bins) * rate / n
+    grid = grid[(grid > 0) & (grid < rate / 2)]
+    xc = x - x.mean()
+    # sum_n x e^{i w t_n} = e^{i w t_0} conj(sum_n x e^{-2 pi i f n / rate}) for real x
+    zoom = zoom_fft(xc, [grid[0], grid[-1]], m=len(grid), fs=rate, endpoint=True)
+    sums = np.exp(2j * np.pi * grid * time[0]) * np.conj(zoom)
+    phi = np.arange(phases) * np.pi / phases
+    omega = np.repeat(2 * np.pi * grid, phases)
+    phase = np.tile(phi, len(grid))
+    # mean of x cos(wt + phi) = Re(e^{i phi} sum x e^{i w t}) / n
+    target = (np.repeat(sums, phases) * np.exp(1j * phase)).real / n
+    corr = _SinusoidCorrelations(omega, phase, time[0], 1.0 / rate, n, target,
+                                 float(xc @ xc) / n)
+    res = _fos_kernel(corr, StopRule("max_terms", max_terms=1), intercept=True)
+    return float(omega[res.support[0]] / (2 * np.pi)) if len(res.support) else f0
+
+
+def _exp_sum(omega: np.ndarray, t0: float, dt: float, n: int) -> np.ndarray:
+    """``sum_j exp(i omega t_j)`` for ``t_j = t0 + j dt``, j < n (a Dirichlet kernel)."""
+    theta = omega * dt
+    half = np.sin(theta / 2)
+    safe = np.abs(half) > 1e-12  # elsewhere theta is a multiple of 2 pi: every term is equal
+    ratio = np.sin(n * theta / 2) / np.where(safe, half, 1.0)
+    formula = np.exp(1j * (omega * t0 + theta * (n - 1) / 2)) * ratio
+    return np.where(safe, formula, n * np.exp(1j * omega * t0))
+
+
+class _SinusoidCorrelations:
+    """FOS correlations of candidates ``cos(omega_c t + phase_c)``, from closed forms.
+
+    ``mean(cos a cos b) = Re[e^{i(pa - pb)} S(wa - wb) + e^{i(pa + pb)} S(wa + wb)] / 2n``
+    with ``S`` the geometric sum :func:`_exp_sum`; only the target correlations
+    (given) need the samples.
+    """
+
+    def __init__(self, omega, phase, t0, dt, n, target, y_mean_sq):
+        self.omega, self.phase, self.t0, self.dt, self.n_samples = omega, phase, t0, dt, n
+        self.target, self.y_mean, self.y_mean_sq = target, 0.0, y_mean_sq
+        self.means = (np.exp(1j * phase) * _exp_sum(omega, t0, dt, n)).real / n
+        self.diag = 0.5 + 0.5 * (np.exp(2j * phase) * _exp_sum(2 * omega, t0, dt, n)).real / n
+
+    def column(self, j: int) -> np.ndarray:
+        w, p, n = self.omega, self.phase, self.n_samples
+        diff = np.exp(1j * (p - p[j])) * _exp_sum(w - w[j], self.t0, self.dt, n)
+        total = np.exp(1j * (p + p[j])) * _exp_sum(w + w[j], self.t0, self.dt, n)
+        return 0.5 * (diff.real + total.real) / n
+
+
+# -- auxiliary channels ---------------------------------------------------------------------
+
+
+class AuxChannels:
+    """Other channels of a record, standardised (as they are and squared) with their ACF.
+
+    They do not change while a model's residual does: a loop that tests
+    several residuals against the same channels prepares them once.
+    """
+
+    def __init__(self, channels: Mapping[str, np.ndarray], acf_lags: int = 50) -> None:
+        self.acf_lags = acf_lags
+        self.forms: dict[str, dict[bool, tuple[np.ndarray, np.ndarray] | None]] = {}
+        for name, x in channels.items():
+            self.forms[name] = {}
+            for square in (False, True):
+                z = _standard((x - x.mean()) ** 2 if square else x)
+                self.forms[name][square] = None if z is None else (
+                    z, autocorrelation(z, acf_lags)[1:])
+
+
+def aux_correlation(
+    residual: np.ndarray, channels: Mapping[str, np.ndarray] | AuxChannels, max_lag: int = 10,
+    alpha: float = ALPHA, acf_lags: int = 50,
+) -> list[Finding]:
+    """Cross-correlation of the residual with each channel and its square at lags 0..K.
+
+    ``rho_k = corr(r[n], x[n-k])``; its variance under independence is
+    Bartlett's ``(1 + 2 sum_j rho_rr(j) rho_xx(j)) / N``, so a slowly varying
+    channel (a temperature) is not flagged because of a residual that is not
+    quite white.  One finding per channel, Bonferroni over all channels, both
+    forms and all lags.  ``channels`` may be prepared (:class:`AuxChannels`).
+    """
+    if not isinstance(channels, AuxChannels):
+        channels = AuxChannels(channels, acf_lags)
+    count = max(1, 2 * (max_lag + 1) * len(channels.forms))
+    r = _standard(residual)
+    r_acf = None if r is None else autocorrelation(r, channels.acf_lags)[1:]
+    out = []
+    for name, forms in channels.forms.items():
+        best = (0.0, 0, 0.0, False)  # z, lag, rho, square
+        rhos = {}
+        for square, prepared in forms.items():
+            if prepared is None or r is None:
+                continue
+            z, z_acf = prepared
+            rho = np.array([r[max_lag:] @ z[max_lag - k : len(z) - k] for k in range(max_lag + 1)])
+            rho /= len(r) - max_lag
+            var = (1 + 2 * float(r_acf @ z_acf)) / len(r)
+            zs = np.abs(rho) / math.sqrt(max(var, 1.0 / len(r)))
+            rhos[square] = rho
+            k = int(np.argmax(zs))
+            if zs[k] > best[0]:
+                best = (float(zs[k]), k, float(rho[k]), square)
+        p = _bonferroni(2 * stats.norm.sf(best[0]), count)
+        out.append(Finding("aux", best[0], p, alpha,
+                           {"channel": name, "lag": best[1], "rho": best[2], "square": best[3]},
+                           {"lags": np.arange(max_lag + 1), "rho": rhos.get(False),
+                            "rho_square": rhos.get(True),
+                            "band": 1.96 / math.sqrt(len(residual))}))
+    return out
+
+
+def _standard(x: np.ndarray) -> np.ndarray | None:
+    sd = float(np.std(x))
+    return None if sd == 0 else (x - x.mean()) / sd
+
+
+# -- nonlinearity ---------------------------------------------------------------------------
+
+
+def nonlinearity(residual: np.ndarray, lagged: np.ndarray, alpha: float = ALPHA) -> Finding:
+    """RESET-style F test: do squares and cross-products of lagged outputs explain the residual?
+
+    ``lagged`` holds ``y[n-1] .. y[n-L]`` row by row (aligned with ``residual``);
+    the restricted model has the constant and the lags, the full one adds all
+    ``L (L+1) / 2`` products.  Both fits come from one Gram matrix of the
+    centred, standardised columns (the restricted one is its leading block).
+    """
+    lags = lagged.shape[1]
+    iu = np.triu_indices(lags)
+    n_cols = lags + len(iu[0])
+    x = np.empty((len(lagged), n_cols), order="F")  # columns contiguous: built one at a time
+    for k in range(lags):
+        x[:, k] = lagged[:, k] - lagged[:, k].mean()
+    for k, (i, j) in enumerate(zip(*iu), start=lags):
+        np.multiply(x[:, i], x[:, j], out=x[:, k])
+        x[:, k] -= x[:, k].mean()
+    r = residual - residual.mean()
+    gram, g, total = x.T @ x, x.T @ r, float(r @ r)
+    diag = np.diag(gram)
+    scale = np.sqrt(np.where(diag > 0, diag, 1.0))  # standardise in the normal equations
+    gram, g = gram / np.outer(scale, scale), g / scale
+    coef = np.linalg.lstsq(gram, g, rcond=None)[0]
+    rss1 = total - float(g @ coef)
+    rss0 = total - float(g[:lags] @ np.linalg.lstsq(gram[:lags, :lags], g[:lags], rcond=None)[0])
+    products = x[:, lags:]
+    q, dof = products.shape[1], len(x) - 1 - lags - products.shape[1]
+    f = ((rss0 - rss1) / q) / (rss1 / dof)
+    strongest = int(np.argmax(np.abs(coef[lags:])))  # on standardised products
+    i, j = iu[0][strongest] + 1, iu[1][strongest] + 1
+    return Finding("nonlinear", float(f), float(stats.f.sf(f, q, dof)), alpha,
+                   {"products": int(q), "max_lag": int(lags),
+                    "strongest": f"y[n-{i}]^2" if i == j else f"y[n-{i}]*y[n-{j}]"},
+                   {"product": products[:, strongest], "residual": residual})
+
+
+def _rss(a: np.ndarray, b: np.ndarray, coef: bool = False):
+    """Residual sum of squares of b on the columns of a (and the weights).
+
+    Through the normal equations of the standardised columns: a few columns of
+    very many samples, where ``lstsq``'s SVD would cost far more.
+    """
+    scale = np.where(a.std(axis=0) > 0, a.std(axis=0), np.abs(a).max(axis=0))
+    scaled = a / scale
+    sol = np.linalg.lstsq(scaled.T @ scaled, scaled.T @ b, rcond=None)[0] / scale
+    r = b - a @ sol
+    return (float(r @ r), sol) if coef else float(r @ r)
+
+
+# -- drift and steps ------------------------------------------------------------------------
+
+TREND_FORMS = ("linear", "quadratic", "exponential", "linear+exponential")
+
+
+def trend_columns(time: np.ndarray, form: str, tau_s: float | None, t0: float) -> np.ndarray:
+    """The time functions of a trend form (without the constant)."""
+    cols = []
+    if form in ("linear", "quadratic", "linear+exponential"):
+        cols.append(time - t0)
+    if form == "quadratic":
+        cols.append((time - t0) ** 2)
+    if form in ("exponential", "linear+exponential"):
+        cols.append(np.exp(-(time - t0) / tau_s))
+    return np.column_stack(cols)
+
+
+def trend(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Finding:
+    """F test of a low-frequency trend: polynomial or exponential warm-up, best by BIC.
+
+    The exponential's time constant is scanned on a log grid from 1/50 of the
+    span to the span; the p-value is Bonferroni-corrected for every form and
+    time constant tried.  The evidence gives the best form and, whatever that
+    form, the time constant of the best exponential one.  Each fit needs only
+    the dot products of its centred columns (``RSS = RSS0 - g' G^-1 g``).
+    """
+    n, span = len(residual), float(time[-1] - time[0])
+    t0 = float(time[0])
+    r = residual - residual.mean()
+    rss0 = float(r @ r)
+    t, t2 = _centred((time - t0) / span), _centred(((time - t0) / span) ** 2)
+    base = {"t": (t, float(t @ r)), "t2": (t2, float(t2 @ r))}
+    taus = np.geomspace(span / 50, span, 30)
+    fits = [_trend_fit("linear", None, [base["t"]], rss0, n),
+            _trend_fit("quadratic", None, [base["t"], base["t2"]], rss0, n)]
+    for tau in taus:  # each exponential once: both of its forms need only its dot products
+        e = _centred(np.exp(-(time - t0) / tau))
+        fits.append(_trend_fit("exponential", tau, [(e, float(e @ r))], rss0, n))
+        fits.append(_trend_fit("linear+exponential", tau, [base["t"], (e, float(e @ r))],
+                               rss0, n))
+    bic, form, tau, rss = min(fits, key=lambda f: f[0])
+    best_tau = min((f for f in fits if f[2] is not None), key=lambda f: f[0])[2]
+    cols = trend_columns(time, form, tau, t0)
+    _, coef = _rss(np.column_stack([np.ones(n), cols]), residual, coef=True)
+    curve = coef[0] + cols @ coef[1:]
+    q = cols.shape[1]
+    f = ((rss0 - rss) / q) / (rss / (n - q - 1))
+    p = _bonferroni(float(stats.f.sf(f, q, n - q - 1)), len(fits))
+    return Finding("trend", float(f), p, alpha,
+                   {"form": form, "tau_s": float(best_tau),
+                    "range": float(curve.max() - curve.min()),
+                    "bic_gain": float(n * math.log(rss0 / n) - bic)},
+                   {"time": time, "fit": curve})
+
+
+def _trend_fit(form: str, tau: float | None, cols: list, rss0: float, n: int) -> tuple:
+    """``(BIC, form, tau, RSS)`` of the centred columns ``[(column, column . r), ...]``:
+    ``RSS = RSS0 - g' G^-1 g``."""
+    gram = np.array([[float(a @ b) for b, _ in cols] for a, _ in cols])
+    g = np.array([gr for _, gr in cols])
+    rss = rss0 - float(g @ np.linalg.lstsq(gram, g, rcond=None)[0])
+    k = len(cols) + (tau is not None)
+    return (n * math.log(max(rss, 1e-300) / n) + k * math.log(n), form, tau, rss)
+
+
+def _centred(x: np.ndarray) -> np.ndarray:
+    return x - x.mean()
+
+
+def change_point(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Finding:
+    """CUSUM test for a shift of the mean, against the supremum of a Brownian bridge.
+
+    ``D = max |S_k| / (sigma_LR sqrt(N))`` with the long-run variance from a
+    Bartlett kernel (Newey-West bandwidth), so a mildly coloured residual does
+    not fire it; the shift is placed where a single mean change fits best.
+    """
+    n = len(residual)
+    r = residual - residual.mean()
+    cusum = np.cumsum(r)
+    bandwidth = int(4 * (n / 100) ** (2 / 9))
+    gamma = [float(r[k:] @ r[: n - k]) / n for k in range(bandwidth + 1)]
+    lrv = gamma[0] + 2 * sum((1 - k / (bandwidth + 1)) * gamma[k] for k in range(1, bandwidth + 1))
+    d = float(np.max(np.abs(cusum)) / math.sqrt(max(lrv, 1e-300) * n))
+    k = np.arange(1, n)
+    split = int(k[np.argmax(np.abs(cusum[:-1]) / np.sqrt(k * (n - k) / n))])
+    shift = float(residual[split:].mean() - residual[:split].mean())
+    rss0 = float(r @ r)
+    reduction = cusum[split - 1] ** 2 * n / (split * (n - split))  # of a single mean shift
+    bic_gain = n * math.log(rss0 / (rss0 - reduction)) - 2 * math.log(n)  # shift and time
+    return Finding("step", d, float(stats.kstwobign.sf(d)), alpha,
+                   {"time_s": float(time[split]), "shift": shift, "bic_gain": float(bic_gain)},
+                   {"time": time, "cusum": cusum})
+
+
+def allan(residual: np.ndarray, rate: float, alpha: float = ALPHA) -> Finding:
+    """Overlapping Allan deviation (allantools) at the longest tau against white noise.
+
+    Under a white residual ``adev(tau)^2`` is ``adev_white(tau)^2 chi2(edf)/edf``
+    (edf from Greenhall's algorithm); the statistic is the ratio at the longest
+    tau with at least ten clusters, and the long-tau slope is reported.
+    """
+    n = len(residual)
+    m = np.unique(np.geomspace(1, max(1, n // 10), 40).astype(int))
+    taus, adev = allantools.oadev(residual, rate=rate, data_type="freq", taus=m / rate)[:2]
+    white = adev[0] * np.sqrt(taus[0] / taus)
+    ratio2 = float((adev[-1] / white[-1]) ** 2)
+    edf = float(allantools.edf_greenhall(alpha=0, d=2, m=int(round(taus[-1] * rate)), N=n,
+                                         overlapping=True))
+    top = taus >= taus[-1] / 10
+    slope = float(np.polyfit(np.log(taus[top]), np.log(adev[top]), 1)[0]) if top.sum() > 1 else 0.0
+    return Finding("allan", ratio2, float(stats.chi2.sf(ratio2 * edf, edf)), alpha,
+                   {"tau_max_s": float(taus[-1]), "slope": slope, "ratio": math.sqrt(ratio2)},
+                   {"taus": taus, "adev": adev, "white": white})

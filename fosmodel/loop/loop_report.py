@@ -1,0 +1,232 @@
+"""Report of the residual loop: before/after table, diagnostics, figures, in one Markdown page."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from ..io.output import save_figure, write_tables, write_text
+from ..models.summary import markdown_table
+from .closeloop import LoopResult, worse_metrics
+from .diagnose import Finding
+from .judge import MIN_GAIN, MIN_HALF_WINDOWS
+
+
+def effects_table(result: LoopResult) -> pd.DataFrame:
+    """Prediction-segment metrics before the loop and after each effect it kept, with what
+    each effect made worse there (more than 2 %)."""
+    taus = list(result.before["bias_rms"])
+    rows = [("before (starting model)", "", "", result.before, "")]
+    previous = result.before
+    for step in result.steps:
+        rows.append((step.effect.describe(), ", ".join(step.terms_added),
+                     _evidence(step.effect.evidence), step.predict,
+                     "; ".join(worse_metrics(previous, step.predict)) or "nothing"))
+        previous = step.predict
+    u = result.config.units or "units"
+    frame = pd.DataFrame([{
+        "Model": name, "Terms added": terms, "Evidence": evidence,
+        f"One-step MSE ({u})^2": m["mse"], "Position error (m)": m["position_error_m"],
+        f"Outage MSE ({u})^2": m["outage_mse"],
+        f"Outage position error (m, {result.config.horizon_s:g} s)": m["outage_position_error_m"],
+        **{f"Bias RMS {t} s ({u})": m["bias_rms"][t] for t in taus},
+        "Worse than the row above": worse,
+    } for name, terms, evidence, m, worse in rows])
+    return frame.dropna(axis=1, how="all")
+
+
+def _evidence(ev: dict) -> str:
+    e = ev.get("evidence", {})
+    detail = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
+                       for k, v in e.items() if k not in ("bic_gain", "range"))
+    return f"{ev.get('test', '')} p={ev.get('p_value', float('nan')):.2g} ({detail})"
+
+
+def findings_table(before: list[Finding], after: list[Finding]) -> pd.DataFrame:
+    """Each test on the first and on the final model: statistic, p-value, fired."""
+    rows = []
+    for b, a in zip(before, after):
+        name = b.test + (f" {b.evidence['channel']}" if b.test == "aux" else "")
+        rows.append({"Test": name, "Statistic before": b.statistic, "p before": b.p_value,
+                     "Fired before": "yes" if b.fired else "no", "Statistic after": a.statistic,
+                     "p after": a.p_value, "Fired after": "yes" if a.fired else "no"})
+    return pd.DataFrame(rows)
+
+
+def residual_figure(result: LoopResult, title: str) -> Figure:
+    """Residual diagnostics of the first (grey) and the final (colour) model."""
+    fig = Figure(figsize=(16, 7.5), layout="constrained")
+    axes = fig.subplots(2, 4).ravel()
+    rate = result.config.rate
+    for findings, color, label in ((result.findings_before, "0.6", "before"),
+                                   (result.findings_after, "C0", "after")):
+        by = {f.test: f for f in findings}
+        acf = by["whiteness"].plot["acf"]
+        axes[0].plot(np.arange(len(acf)) / rate, acf, color=color, label=label)
+        spec = by["periodic"].plot
+        axes[1].semilogy(spec["freqs"], _smooth(spec["spectrum"]), color=color, label=label)
+        al = by["allan"].plot
+        axes[2].loglog(al["taus"], al["adev"], "o-", color=color, ms=3, label=label)
+        aux = [f for f in findings if f.test == "aux"]
+        for k, f in enumerate(aux):
+            axes[3].plot(f.plot["lags"], f.plot["rho"], color=color,
+                         ls=["-", "--", ":", "-."][k % 4], label=f"{label} {f.evidence['channel']}")
+        tr = by["trend"].plot
+        axes[4].plot(*_block_means(tr["time"], result_residual(result, label)), color=color,
+                     label=label)
+        axes[4].plot(tr["time"], tr["fit"], color=color, lw=2)
+        cp = by["step"].plot
+        axes[5].plot(cp["time"], cp["cusum"], color=color, label=label)
+        if "nonlinear" in by:
+            nl = by["nonlinear"].plot
+            axes[6].plot(*_binned(nl["product"], nl["residual"]), "o-", color=color, label=label)
+    white = result.findings_before[-1].plot
+    axes[2].loglog(white["taus"], white["white"], "k:", label="white noise")
+    band = result.findings_before[0].plot["band"]
+    for ax in (axes[0], axes[3]):
+        ax.axhspan(-band, band, color="0.9", zorder=0)
+    titles = ["residual autocorrelation (lag, s)", "least-squares spectrum (Hz)",
+              "Allan deviation (tau, s)", "cross-correlation with channels (lag, samples)",
+              "slow part: 1 s means and trend fit (s)", "CUSUM (s)",
+              "residual against strongest product (binned)"]
+    for ax, text in zip(axes, titles):
+        ax.set_title(text, fontsize="medium")
+        ax.grid(True, alpha=0.3)
+        if ax.lines:
+            ax.legend(fontsize="x-small", loc="upper right")  # "best" is slow on long records
+    axes[7].axis("off")
+    axes[7].text(0, 1, _fired_text(result), va="top", family="monospace", fontsize="small")
+    fig.suptitle(title)
+    return fig
+
+
+def result_residual(result: LoopResult, label: str) -> np.ndarray:
+    return result.residual_before if label == "before" else result.residual_after
+
+
+def _smooth(s: np.ndarray, width: int = 25) -> np.ndarray:
+    return np.convolve(s, np.ones(width) / width, mode="same")
+
+
+def _block_means(time: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    step = max(1, int(round(1.0 / (time[1] - time[0])))) if len(time) > 1 else 1
+    m = len(r) // step * step
+    return time[:m:step], r[:m].reshape(-1, step).mean(axis=1)
+
+
+def _binned(x: np.ndarray, r: np.ndarray, bins: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """Mean of ``r`` in quantile bins of ``x``; a quantised ``x`` repeats edges, whose bins drop."""
+    edges = np.unique(np.quantile(x, np.linspace(0, 1, bins + 1)))
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, max(len(edges) - 2, 0))
+    count = np.bincount(idx)
+    kept = count > 0
+    centres = np.bincount(idx, weights=x)[kept] / count[kept]
+    return centres, np.bincount(idx, weights=r)[kept] / count[kept]
+
+
+def _fired_text(result: LoopResult) -> str:
+    lines = ["tests that fire (before -> after):"]
+    for b, a in zip(result.findings_before, result.findings_after):
+        name = b.test + (f" {b.evidence['channel']}" if b.test == "aux" else "")
+        yes = {True: "yes", False: "no"}
+        lines.append(f"  {name:<18} {yes[b.fired]:>3} -> {yes[a.fired]}")
+    lines.append("effects kept:")
+    lines += [f"  {s.effect.describe()}" for s in result.steps] or ["  none"]
+    return "\n".join(lines)
+
+
+def write_loop_report(result: LoopResult, out_dir: Path, title: str) -> list[Path]:
+    """Write ``report.md``, the effects and diagnostics tables and the residual figure."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    effects = effects_table(result)
+    diagnostics = findings_table(result.findings_before, result.findings_after)
+    paths = write_tables(effects, out_dir, "effects")
+    paths += write_tables(diagnostics, out_dir, "diagnostics")
+    paths += save_figure(residual_figure(result, title), out_dir, "residual")
+    paths.append(out_dir / "report.md")
+    write_text(paths[-1], report_markdown(result, title, effects, diagnostics))
+    return paths
+
+
+def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
+                    diagnostics: pd.DataFrame) -> str:
+    cfg, seg = result.config, result.segments
+    spans = ", ".join(f"{k} {s.start / cfg.rate:g}-{s.stop / cfg.rate:g} s" for k, s in seg.items())
+    origins = ", ".join(f"{o:g}" for o in _origins(result)) or "the fitting segment's end"
+    lines = [
+        f"# Residual loop: {title}", "",
+        f"Segments: {spans}. Starting model: FOS, lags 1-{cfg.max_lag}, CP 1. Each diagnostic "
+        f"is a test at level {cfg.alpha:g} on the fitting segment's residual. An effect is kept "
+        f"only if it lowers the evaluation segment's one-step error or its outage bias (mean "
+        f"free-run error over {cfg.eval_horizon_s:g} s windows) beyond noise (forecast-"
+        f"encompassing t test at {cfg.accept_alpha:g}) by at least {MIN_GAIN:.1%}, over the "
+        f"segment and, when each half holds at least {MIN_HALF_WINDOWS} windows, over each "
+        f"half (not asked of a level, which holds still beyond its data); and if, with its "
+        f"weights refitted on the past before earlier origins ({origins} s), it still loses "
+        "nothing on that segment. A drift, a step or a channel's slow part must also clearly "
+        "beat the local level. Level time constants offered: "
+        + (", ".join(f"{t:g}" for t in result.level_taus) or "none") + " s. "
+        "The prediction segment decides nothing: it gives the numbers below.", "",
+        _verdict_line(result), "",
+        "## Before and after, prediction segment", "", markdown_table(effects, digits=4), "",
+        "## Diagnostics of the first and the final model", "",
+        markdown_table(diagnostics, digits=3), "",
+    ]
+    if result.rejected:
+        lines += ["## Candidates that did not survive the evaluation segment", ""]
+        for r in result.rejected:
+            reason = r["evaluation"].get("reason")
+            lines.append(f"- round {r.get('round', 1)}, {r['effect']}: "
+                         f"{evaluation_text(r['evaluation'])}" + (f"; {reason}" if reason else ""))
+        lines.append("")
+    if result.unexplained:
+        lines += [f"Still firing at the end, with no effect that survives: "
+                  f"{', '.join(result.unexplained)}.", ""]
+    lines += ["![residual diagnostics before and after](residual.png)", ""]
+    return "\n".join(lines)
+
+
+def evaluation_text(ev: dict) -> str:
+    """A candidate's evaluation in words: each test's gain, p-value and, when judged, its
+    gains on the two halves of the segment and from the earlier origins."""
+    parts = []
+    for name, label in (("one_step", "one-step"), ("outage", "outage bias")):
+        text = f"{label} gain {ev[f'{name}_gain']:.2g} (p {ev[f'{name}_p']:.2g}"
+        if ev.get("halves_judged"):
+            first, second = ev[f"{name}_gain_halves"]
+            text += f"; halves {first:.2g}, {second:.2g}"
+        earlier = (ev.get(f"{name}_gain_origins") or [])[:-1]
+        if earlier:
+            text += "; earlier origins " + ", ".join(
+                "-" if g is None else f"{g:.2g}" for g in earlier)
+        parts.append(text + ")")
+    return ", ".join(parts)
+
+
+def _origins(result: LoopResult) -> list[float]:
+    for ev in [s.comparison for s in result.steps] + [r["evaluation"] for r in result.rejected]:
+        if ev.get("origins_s"):
+            return ev["origins_s"][:-1]
+    return []
+
+
+def _verdict_line(result: LoopResult) -> str:
+    """The outcome on the prediction segment, in one plain sentence."""
+    if not result.steps:
+        return "No effect survived the evaluation: the final model is the starting model."
+    b, a = result.before, result.after
+    change = [f"one-step MSE {a['mse'] / b['mse']:.3g}x"]
+    if b["outage_position_error_m"]:
+        change.append(f"{result.config.horizon_s:g} s outage position error "
+                      f"{a['outage_position_error_m'] / b['outage_position_error_m']:.3g}x")
+    last = list(b["bias_rms"])[-1]
+    if b["bias_rms"][last]:
+        change.append(f"{last} s bias RMS {a['bias_rms'][last] / b['bias_rms'][last]:.3g}x")
+    worse = result.worse()
+    return ("On the prediction segment, which chose nothing, the final model against the "
+            "starting one: " + ", ".join(change) + ". "
+            + (f"It is WORSE there in: {'; '.join(worse)}." if worse
+               else "Nothing there got worse by more than 2 %."))

@@ -1,0 +1,807 @@
+"""FOSModel: a Fast Orthogonal Search difference-equation model of a time series.
+
+The model (FOS paper, eqs. 14-15) is
+
+    y[n] - mu_y = a_0 + sum_m a_m P_m[n] + e[n],
+
+where each ``P_m`` is a product of lagged, centred outputs ``y[n-l] - mu_y``
+(1 <= l <= L), local levels of the centred output (:mod:`fosmodel.core.levels`),
+lagged centred inputs ``x[n-k] - mu_x`` (0 <= k <= K) and user-given columns,
+chosen by :func:`fosmodel.core.fos._fos_kernel` among all such
+candidates up to the cross-product degree.  Centring on the training means
+(``center=True``) makes the selected terms independent of the sensor bias:
+adding an offset to the record leaves the model unchanged but for ``mu``.
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+import warnings
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from sklearn.base import BaseEstimator
+
+from .._version import __version__
+from ..core.blas import one_blas_thread
+from ..core.candidates import (
+    OUTPUT,
+    CandidateSpec,
+    Term,
+    check_terms_fit_spec,
+    count_candidates,
+    evaluate_sum,
+    evaluate_terms,
+    generate_terms,
+)
+from ..core.correlations import LagCorrelations, PooledCorrelations
+from ..core.derived import channels_read, derive, is_derived
+from ..core.exceptions import FitWarning, InputError
+from ..core.fos import StopRule, _DataCorrelations, _fos_kernel, center
+from ..core.levels import (
+    check_level_rate,
+    check_level_series,
+    level_after,
+    level_series,
+    level_tau,
+    with_levels,
+)
+from ..core.validation import as_channels, as_signal
+from .dynamics import (
+    ar_free_run,
+    ar_roots,
+    cut_at_divergence,
+    free_run_inputs,
+    is_stable,
+    warn_if_unstable,
+)
+from .freerun import run_many, run_one, split_expansion
+from .summary import Summary
+
+log = logging.getLogger(__name__)
+
+FORMAT = "fosmodel.FOSModel"
+_SAMPLES_PER_WEIGHT = 10  # below this per weight, a fit warns that its weights are rough
+FORMAT_VERSION = 1
+_BYTES_PER_VALUE = 8
+
+
+class FOSModel(BaseEstimator):
+    """Fast Orthogonal Search model of a sensor error time series.
+
+    Parameters
+    ----------
+    max_lag : int
+        L, lagged outputs ``y[n-1] .. y[n-L]``.
+    degree : int
+        CP, the highest cross-product degree of the lagged factors.
+    exog_lags : dict of str to int, optional
+        K per exogenous channel: ``{"temp": 5}`` offers ``temp[n-0] .. temp[n-5]``.
+    columns : list of str, optional
+        Names of user-given candidate columns (passed in ``exog``), e.g. a
+        sinusoid or a trend; they enter linearly.  Once fitted, a column whose
+        name says how to compute it (``cos@7.3Hz``, ``step@120s``, ... see
+        :mod:`fosmodel.core.derived`) need not be passed again: with ``rate`` set,
+        the model rebuilds it from the record.
+    levels : list of float, optional
+        Time constants in seconds of local levels ``level@<tau>s`` of the output
+        to offer (the exponentially weighted mean of its past; see
+        :mod:`fosmodel.core.levels` and :func:`fosmodel.core.levels.level_grid`).  They
+        need ``rate``.  They are computed from the output; ``exog`` may carry
+        them already (``level_series`` of the raw output, under their names,
+        spot-checked) to save the work on a record used many times.
+    rate : float, optional
+        Sample rate in Hz (needed with ``levels``).
+    product_lags : int, optional
+        Cross-products only of the output lags ``y[n-1] .. y[n-P]`` (by default of
+        every lagged factor and level).
+    max_terms : int, optional
+        Most terms to select besides the constant.
+    stop : str
+        Stopping rule: ``"korenberg"`` (default), ``"max_terms"``, ``"variance"``,
+        ``"mean_square"``, ``"aic"``, ``"bic"``, ``"fpe"``, ``"mdl"``; see
+        :class:`fosmodel.core.fos.StopRule`.
+    tol : float, optional
+        Fraction for the ``"variance"`` and ``"mean_square"`` rules.
+    center : bool
+        Build the candidates from signals centred on their training means.
+    dependence_tol : float
+        Candidates whose orthogonal part falls to this fraction of their own
+        mean square are numerically dependent and skipped.
+    max_candidates : int
+        Refuse candidate sets larger than this (the count is computed first).
+    correlations : {"fast", "reference"}
+        Korenberg's correlation tables, or point by point on the candidate
+        matrix (slow, for checking).
+
+    Attributes
+    ----------
+    terms_ : list of str
+        Selected terms in selection order (the constant excluded).
+    coef_ : ndarray
+        Their weights ``a_m``.
+    intercept_ : float
+        ``a_0``, the constant of the centred expansion.
+    offsets_ : dict of str to float
+        Centring offsets ``mu`` of ``y`` and of each channel (zeros if ``center=False``).
+    mse_path_ : ndarray
+        Training residual MSE after each term of ``terms_``.
+    q_ : ndarray
+        MSE reduction ``Q`` of each term (eq. 27).
+    mse_null_ : float
+        Training MSE of the constant-only model (the variance of y).
+    n_candidates_, n_samples_, lag_window_, stop_reason_, n_dependent_, target_name_
+
+    Examples
+    --------
+    >>> from scipy.signal import lfilter
+    >>> rng = np.random.default_rng(1)
+    >>> y = lfilter([1.0], [1.0, -1.5, 0.7], rng.standard_normal(5000))
+    >>> model = FOSModel(max_lag=5).fit(y)
+    >>> model.terms_
+    ['y[n-1]', 'y[n-2]']
+    >>> np.round(model.coef_, 2).tolist()
+    [1.5, -0.7]
+    """
+
+    def __init__(
+        self,
+        max_lag: int = 10,
+        degree: int = 1,
+        exog_lags: dict[str, int] | None = None,
+        columns: list[str] | None = None,
+        levels: list[float] | None = None,
+        rate: float | None = None,
+        product_lags: int | None = None,
+        max_terms: int | None = None,
+        stop: str = "korenberg",
+        tol: float | None = None,
+        center: bool = True,
+        dependence_tol: float = 1e-10,
+        max_candidates: int = 100_000,
+        correlations: str = "fast",
+    ) -> None:
+        self.max_lag = max_lag
+        self.degree = degree
+        self.exog_lags = exog_lags
+        self.columns = columns
+        self.levels = levels
+        self.rate = rate
+        self.product_lags = product_lags
+        self.max_terms = max_terms
+        self.stop = stop
+        self.tol = tol
+        self.center = center
+        self.dependence_tol = dependence_tol
+        self.max_candidates = max_candidates
+        self.correlations = correlations
+
+    # -- fitting -------------------------------------------------------------------------
+
+    def _spec(self) -> CandidateSpec:
+        spec = CandidateSpec(self.max_lag, self.degree, self.exog_lags or {}, self.columns or (),
+                             levels=self.levels or (), product_lags=self.product_lags)
+        check_level_rate(spec.levels, self.rate)
+        return spec
+
+    def fit(
+        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        segments: Sequence[slice] | None = None,
+    ) -> FOSModel:
+        """Select terms and weights on the record ``y`` (and its exogenous channels).
+
+        Parameters
+        ----------
+        y : array-like of shape (N,)
+            The modelled signal (numpy array, list or pandas Series).
+        exog : dict or DataFrame, optional
+            Exogenous channels and user columns by name, each of length N.
+        segments : sequence of slice, optional
+            Contiguous runs of ``y`` between gaps: the fit pools their windows,
+            each with its own lag window, so that no lag reaches across a gap.
+            Runs too short for the lag window are left out.
+
+        Returns
+        -------
+        self
+        """
+        spec = self._spec()
+        rule = StopRule(self.stop, self.tol, self.max_terms)
+        if self.correlations not in ("fast", "reference"):
+            raise InputError(
+                f"correlations must be 'fast' or 'reference', not {self.correlations!r}")
+        y_arr = as_signal(y, "y")
+        n_cand = count_candidates(spec)
+        n0 = spec.lag_window
+        log.info("FOS candidate set: %d candidates (L=%d, CP=%d, exog=%s, columns=%d)",
+                 n_cand, spec.max_lag, spec.degree, dict(spec.exog_lags), len(spec.columns))
+        runs = _usable(segments, len(y_arr), n0)
+        where = f" in {len(segments)} segments" if segments is not None else ""
+        if not runs:
+            raise InputError(f"record too short: {len(y_arr)} samples{where}, no longer than "
+                             f"the lag window of {n0} samples (the largest lag)")
+        if n_cand > self.max_candidates:
+            mib = n_cand * max(len(y_arr) - n0, 0) * _BYTES_PER_VALUE / 2**20
+            raise InputError(
+                f"{n_cand} candidates exceed max_candidates={self.max_candidates} "
+                f"(as a matrix over this record they would take {mib:,.0f} MiB); "
+                "lower the lag, the degree or the channels, or raise max_candidates"
+            )
+        window = sum(s.stop - s.start - n0 for s in runs)
+        if window < n_cand + 2:
+            raise InputError(
+                f"record too short: {len(y_arr)} samples{where} leave {window} in the fitting "
+                f"window (after the lag window of {n0}) for {n_cand} candidates; FOS needs "
+                f"at least {n_cand + 2} to tell them apart: lower the lag, the degree or the "
+                "channels, or give a longer record")
+        if np.ptp(y_arr) == 0:
+            raise InputError(f"y is constant ({y_arr[0]:g}): there is nothing to model")
+        channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
+        _refuse_own_input(y_arr, channels)
+        signals, offsets = self._centred({OUTPUT: y_arr, **channels}, None)
+        if segments is None:
+            signals.update(self._given_levels(exog, y_arr, offsets[OUTPUT]))
+        terms = [t for t in generate_terms(spec) if not t.is_constant]
+        pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, spec) for s in runs]
+        if self.correlations == "fast":
+            with one_blas_thread():  # short products: threads cost more than they give
+                parts = [LagCorrelations(terms, piece, n0) for piece in pieces]
+                corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
+                res = _fos_kernel(corr, rule, intercept=True,
+                                  dependence_tol=self.dependence_tol)
+        else:
+            blocks = [evaluate_terms(terms, piece, n0) for piece in pieces]
+            corr = _DataCorrelations(
+                blocks[0] if len(blocks) == 1 else np.vstack(blocks),
+                np.concatenate([piece[OUTPUT][n0:] for piece in pieces]))
+            res = _fos_kernel(corr, rule, intercept=True, dependence_tol=self.dependence_tol)
+
+        self.spec_ = spec
+        self._set_terms([terms[i] for i in res.support], res.coef, res.intercept)
+        self.offsets_ = offsets
+        self.mse_path_ = res.mse_path
+        self.q_ = res.q
+        self.mse_null_ = res.mse_null
+        self.n_candidates_ = n_cand
+        self.n_samples_ = res.n_samples
+        self.lag_window_ = n0
+        self.stop_reason_ = res.stop_reason
+        self.n_dependent_ = res.n_dependent
+        self.target_name_ = getattr(y, "name", None) or OUTPUT
+        thin = self._thin()
+        if thin:
+            warnings.warn(FitWarning(thin), stacklevel=2)
+        return self
+
+    def _thin(self) -> str | None:
+        """A note when the fitting window holds few samples per weight, else None."""
+        weights = len(self.terms_) + 1
+        if self.n_samples_ >= _SAMPLES_PER_WEIGHT * weights:
+            return None
+        return (f"only {self.n_samples_} samples for {weights} weights (the constant and "
+                f"{weights - 1} term(s)), fewer than {_SAMPLES_PER_WEIGHT} each: the weights "
+                "are rough; fit a longer record before relying on them")
+
+    def _with_levels(self, signals: dict[str, np.ndarray], spec: CandidateSpec):
+        """``signals`` (centred, one contiguous run) with the levels of its output added
+        (those not there already)."""
+        missing = [name for name in spec.level_names if name not in signals]
+        return with_levels(signals, missing, self.rate, OUTPUT)
+
+    def _given_levels(self, exog: object, y: np.ndarray, mu: float,
+                      lo: int = 0) -> dict[str, np.ndarray]:
+        """Level series passed in ``exog`` (of the raw output), checked, centred by ``mu``,
+        from sample ``lo`` on."""
+        if exog is None:
+            return {}
+        names = [n for n in self._spec().level_names if n in set(map(str, exog.keys()))]
+        return {n: check_level_series(exog[n], y, level_tau(n), self.rate, n)[lo:] - mu
+                for n in names}
+
+    def _set_terms(self, terms: list[Term], coef: np.ndarray, intercept: float) -> None:
+        self._terms = terms
+        self.terms_ = [t.name for t in terms]
+        self.coef_ = np.asarray(coef, dtype=float)
+        self.intercept_ = float(intercept)
+        self._expansion = split_expansion(terms, self.coef_, self.intercept_, self.spec_.max_lag,
+                                          self.spec_.level_names, self.rate)
+
+    def _centred(
+        self, signals: dict[str, np.ndarray], offsets: Mapping[str, float] | None
+    ) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+        """Subtract the training offsets (or, when fitting, compute them)."""
+        if not self.center:
+            return signals, {k: 0.0 for k in signals}
+        if offsets is None:
+            pairs = {k: center(v) for k, v in signals.items()}
+            return ({k: c for k, (c, _) in pairs.items()},
+                    {k: float(m) for k, (_, m) in pairs.items()})
+        return {k: v - offsets[k] for k, v in signals.items()}, dict(offsets)
+
+    # -- using the model -----------------------------------------------------------------
+
+    def _check_fitted(self) -> None:
+        if not hasattr(self, "terms_"):
+            raise InputError("this FOSModel is not fitted yet; call fit() first")
+
+    def _signals(self, y: object, exog: object, levels: bool = True) -> dict[str, np.ndarray]:
+        """Centred output and inputs, with the level series given in ``exog`` if ``levels``."""
+        y_arr = as_signal(y, "y")
+        channels = self._inputs(exog, len(y_arr))
+        signals, _ = self._centred({OUTPUT: y_arr, **channels}, self._offsets_for(channels))
+        if levels and self.spec_.levels:
+            signals.update(self._given_levels(exog, y_arr, self.offsets_[OUTPUT]))
+        return signals
+
+    def _inputs(self, exog: object, n: int, lo: int = 0) -> dict[str, np.ndarray]:
+        """The channels and columns of a fitted model over samples ``lo .. n-1``: given in
+        ``exog`` (``n`` long), or rebuilt from their names (:mod:`fosmodel.core.derived`)."""
+        spec = self.spec_
+        names = [*spec.exog_lags, *spec.columns]
+        given = set(map(str, exog.keys())) if exog is not None else set()
+        rebuilt = [c for c in names if c not in given and is_derived(c)]
+        if rebuilt and self.rate is None:
+            raise InputError(f"{rebuilt[0]!r} can be rebuilt only with the model's sample rate "
+                             "(rate=...); pass its values instead")
+        read = [c for c in names if c not in rebuilt]
+        channels = as_channels(_cut(exog, read, n, lo), read, n - lo)
+        if rebuilt:
+            source = as_channels(exog, channels_read(rebuilt), n)
+            for name in rebuilt:
+                channels[name] = derive(name, n, self.rate, source, self.offsets_)[lo:]
+        return channels
+
+    def _signals_from(self, y: object, exog: object, lo: int) -> dict[str, np.ndarray]:
+        """Centred output, inputs and levels over samples ``lo ..`` of the record ``y`` (the
+        levels from its whole past: given in ``exog``, or computed)."""
+        y_arr = as_signal(y, "y")
+        n = len(y_arr)
+        channels = self._inputs(exog, n, lo)
+        signals, _ = self._centred({OUTPUT: y_arr[lo:], **channels},
+                                   self._offsets_for(channels))
+        if self.spec_.levels:
+            mu = self.offsets_[OUTPUT]
+            given = self._given_levels(exog, y_arr, mu, lo)
+            missing = [name for name in self.spec_.level_names if name not in given]
+            for name in missing:  # of the raw output: a level of y - mu is its level - mu
+                given[name] = level_series(y_arr, level_tau(name), self.rate)[lo:] - mu
+            signals.update(given)
+        return signals
+
+    def input_columns(self) -> list[str]:
+        """The record columns this fitted model reads besides its output (inputs it cannot
+        rebuild, and the channels those it rebuilds come from)."""
+        self._check_fitted()
+        names = [*self.spec_.exog_lags, *self.spec_.columns]
+        rebuilt = [c for c in names if is_derived(c)] if self.rate is not None else []
+        read = [c for c in names if c not in rebuilt]
+        return read + [c for c in channels_read(rebuilt) if c not in read]
+
+    def _offsets_for(self, channels: Mapping[str, object]) -> dict[str, float]:
+        return {OUTPUT: self.offsets_[OUTPUT], **{k: self.offsets_[k] for k in channels}}
+
+    def predict(
+        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        segments: Sequence[slice] | None = None, *, start: int = 0,
+    ):
+        """One-step-ahead prediction from the true past, aligned with ``y``.
+
+        Sample ``n`` is predicted from ``y[n-1], y[n-2], ...`` and the channels
+        up to ``n``; the first ``lag_window_`` samples (of each segment, if
+        ``segments`` are given) have no prediction (NaN).  With ``start``, only
+        the samples from ``start`` on are predicted (the others are NaN): the
+        work is that of the samples from ``start - lag_window_`` on, and the
+        levels' past.
+
+        Returns
+        -------
+        ndarray, or Series with the index of ``y`` if ``y`` is a Series
+        """
+        self._check_fitted()
+        n0 = self.lag_window_
+        if segments is not None:
+            if start:
+                raise InputError("predict takes segments or a start, not both")
+            signals = self._signals(y, exog, levels=False)
+            runs, lo = _usable(segments, len(signals[OUTPUT]), n0), 0
+        else:
+            lo = max(int(start) - n0, 0)
+            signals = self._signals_from(y, exog, lo)
+            runs = _usable(None, len(signals[OUTPUT]), n0)
+        n = lo + len(signals[OUTPUT])
+        out = np.full(n, np.nan)
+        for run in runs:
+            piece = self._with_levels({k: v[run] for k, v in signals.items()}, self.spec_)
+            values = evaluate_sum(self._terms, self.coef_, piece, n0)
+            out[lo + run.start + n0 : lo + run.stop] = (values + self.intercept_
+                                                        + self.offsets_[OUTPUT])
+        if isinstance(y, pd.Series):
+            return pd.Series(out, index=y.index, name="prediction")
+        return out
+
+    def residuals(self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None):
+        """``y`` minus its one-step prediction (NaN over the lag window)."""
+        pred = self.predict(y, exog)
+        return (y - pred) if isinstance(pred, pd.Series) else as_signal(y, "y") - pred
+
+    def refit_weights(
+        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        segments: Sequence[slice] | None = None,
+    ) -> FOSModel:
+        """A copy with the selected terms' weights fitted anew on ``y`` (least squares).
+
+        The terms, the candidate set and the centring offsets stay; terms that
+        are numerically dependent on ``y`` (a step after its end, say) are
+        dropped.  The residual loop uses it to ask how a model chosen on one
+        stretch does when its weights come from an earlier one.
+
+        Returns
+        -------
+        FOSModel
+        """
+        self._check_fitted()
+        y_arr = as_signal(y, "y")
+        n0 = self.lag_window_
+        runs = _usable(segments, len(y_arr), n0)
+        if sum(s.stop - s.start - n0 for s in runs) < len(self._terms) + 2:
+            raise InputError(f"record too short to refit {len(self._terms)} term(s): "
+                             f"{len(y_arr)} samples")
+        signals = self._signals(y_arr, exog, levels=segments is None)
+        pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, self.spec_)
+                  for s in runs]
+        with one_blas_thread():
+            parts = [LagCorrelations(self._terms, piece, n0) for piece in pieces]
+            corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
+            res = _fos_kernel(corr, StopRule("max_terms", max_terms=len(self._terms)),
+                              intercept=True, dependence_tol=self.dependence_tol)
+        new = copy.copy(self)
+        new._set_terms([self._terms[i] for i in res.support], res.coef, res.intercept)
+        new.mse_path_, new.q_, new.mse_null_ = res.mse_path, res.q, res.mse_null
+        new.n_samples_, new.stop_reason_ = res.n_samples, "refit"
+        new.n_dependent_ = res.n_dependent
+        return new
+
+    def ar_coefficients(self) -> np.ndarray:
+        """Weights of the pure output lags ``y[n-l]``, l = 1..L (zeros where not selected)."""
+        self._check_fitted()
+        a = np.zeros(self.spec_.max_lag)
+        for term, c in zip(self._terms, self.coef_):
+            if term.degree == 1 and term.factors[0][0] == OUTPUT:
+                a[term.factors[0][1] - 1] = c
+        return a
+
+    def ar_roots(self) -> np.ndarray:
+        """Roots of ``z^L - a_1 z^(L-1) - ... - a_L`` for the linear output dynamics."""
+        return ar_roots(self.ar_coefficients())
+
+    def is_stable(self) -> bool:
+        """Whether every root of the linear output dynamics lies inside the unit circle."""
+        return is_stable(self.ar_coefficients())
+
+    @property
+    def n_terms_(self) -> int:
+        """Number of selected terms besides the constant."""
+        self._check_fitted()
+        return len(self.terms_)
+
+    def simulate(
+        self,
+        y_init: object,
+        n_steps: int,
+        exog: Mapping[str, object] | pd.DataFrame | None = None,
+        noise: object | None = None,
+    ) -> np.ndarray:
+        """Free run: continue ``y_init`` for ``n_steps`` samples from the model's own output.
+
+        Parameters
+        ----------
+        y_init : array-like
+            True past, at least ``lag_window_`` samples; the run starts after its end.
+            The levels (if any) are the exponentially weighted means of all of it;
+            the lags read only its last ``lag_window_`` samples.
+        n_steps : int
+            Samples to simulate.
+        exog : dict or DataFrame, optional
+            Channels and columns for ``len(y_init) + n_steps`` samples, aligned
+            with ``y_init`` followed by the simulated part.
+        noise : array-like, optional
+            Driving noise added at each simulated step (zero by default: the
+            deterministic free-run prediction).
+
+        Returns
+        -------
+        ndarray of shape (n_steps,)
+
+        Warns
+        -----
+        UnstableModelWarning
+            If the linear output dynamics are unstable, or the run diverges
+            (the samples from the divergence on are NaN).
+        """
+        self._check_fitted()
+        n0 = self.lag_window_
+        y0, drive = free_run_inputs(y_init, n_steps, noise, n0)
+        warn_if_unstable(self.ar_coefficients(), "the fitted output dynamics")
+        channels = self._inputs(exog, len(y0) + int(n_steps))
+        cut = len(y0) - n0  # only the last N0 samples of the past reach the lags
+        recent = {OUTPUT: np.r_[y0[cut:], np.zeros(n_steps)],
+                  **{k: v[cut:] for k, v in channels.items()}}
+        signals, _ = self._centred(recent, self._offsets_for(channels))
+        ex = self._expansion
+        drive = drive + ex.intercept + evaluate_sum(
+            [t for t, _ in ex.drive], [c for _, c in ex.drive], signals, n0)
+        with np.errstate(over="ignore", invalid="ignore"):
+            if ex.nonlinear or len(ex.gains):
+                levels = self._levels_after(y0, exog)
+                rests = [_rest(t.rest, signals, n0) for t in ex.nonlinear]
+                out = run_one(ex, signals[OUTPUT][:n0], levels, drive, rests)
+            else:
+                out = ar_free_run(ex.phi, signals[OUTPUT][:n0], drive)
+        return cut_at_divergence(out) + self.offsets_[OUTPUT]
+
+    def _levels_after(self, y0: np.ndarray, exog: object) -> np.ndarray:
+        """The centred levels at the first sample after ``y0`` (from series given in ``exog``
+        over the past and the run, or computed from ``y0``)."""
+        mu, out = self.offsets_[OUTPUT], []
+        given = set(map(str, exog.keys())) if exog is not None else set()
+        for name in self.spec_.level_names:
+            tau = level_tau(name)
+            if name in given:
+                past = check_level_series(np.asarray(exog[name], dtype=float)[: len(y0)], y0,
+                                          tau, self.rate, name)
+                a = 1.0 / (tau * self.rate)
+                out.append((1.0 - a) * past[-1] + a * y0[-1] - mu)
+            else:
+                out.append(level_after(y0 - mu, tau, self.rate))
+        return np.array(out)
+
+    def free_runs(
+        self, y: object, starts: Sequence[int], n_steps: int,
+        exog: Mapping[str, object] | pd.DataFrame | None = None,
+    ) -> np.ndarray:
+        """Free runs of ``n_steps`` samples from the true past ``y[:s]``, each ``s`` in ``starts``.
+
+        Row ``k`` equals ``simulate(y[:s_k], n_steps, exog cut to y[:s_k + n_steps])``
+        (to rounding), computed for all starts at once; NaN in a row from a
+        divergence on.  ``y`` (and ``exog``) must cover every run.
+
+        Returns
+        -------
+        ndarray of shape (len(starts), n_steps)
+        """
+        self._check_fitted()
+        n, n0 = len(y), self.lag_window_
+        s = np.asarray(starts, dtype=np.int64).reshape(-1)
+        if not s.size:
+            return np.empty((0, n_steps))
+        if s.min() < n0 or s.max() + n_steps > n:
+            raise InputError(f"free runs of {n_steps} samples from starts {s.min()}..{s.max()} "
+                             f"need samples {n0}..{s.max() + n_steps - 1}; y has {n}")
+        lo = int(s.min()) - n0  # nothing before reaches a run (the levels come with the signals)
+        signals = self._signals_from(y, exog, lo)
+        s = s - lo
+        ex = self._expansion
+        steps = s[:, None] + np.arange(n_steps)
+        drive = ex.intercept + evaluate_sum(
+            [t for t, _ in ex.drive], [c for _, c in ex.drive], signals, n0)[steps - n0]
+        levels = np.column_stack([signals[name][s] for name in self.spec_.level_names]) \
+            if len(ex.gains) else np.zeros((len(s), 0))
+        past = signals[OUTPUT][s[:, None] + np.arange(-n0, 0)]
+        rests = [None if t.rest is None else evaluate_sum([t.rest], [1.0], signals, n0)[steps - n0]
+                 for t in ex.nonlinear]
+        return run_many(ex, past, levels, drive, rests) + self.offsets_[OUTPUT]
+
+    # -- reporting and persistence -------------------------------------------------------
+
+    def summary(self) -> Summary:
+        """Term, weight, MSE reduction Q and share of the variance explained."""
+        self._check_fitted()
+        null = self.mse_null_
+        share = 100.0 * self.q_ / null if null > 0 else np.zeros_like(self.q_)
+        table = pd.DataFrame({
+            "term": ["1", *self.terms_],
+            "coef": [self.intercept_, *self.coef_],
+            "Q (MSE reduction)": [np.nan, *self.q_],
+            "% var": [np.nan, *share],
+            "cum % var": [np.nan, *np.cumsum(share)],
+        })
+        final = float(self.mse_path_[-1]) if len(self.mse_path_) else null
+        spec = self.spec_
+        info = [
+            ("Output", str(self.target_name_)),
+            ("Samples in window", f"{self.n_samples_}"),
+            ("Lag window N0", f"{self.lag_window_}"),
+            ("Candidates", f"{self.n_candidates_}"),
+            ("Max lag L / CP", f"{spec.max_lag} / {spec.degree}"),
+            ("Exogenous", ", ".join(f"{k}:0-{v}" for k, v in spec.exog_lags.items()) or "none"),
+            *([("Levels offered", ", ".join(spec.level_names))] if spec.levels else []),
+            ("Terms selected", f"{len(self.terms_)}"),
+            ("Stop rule",
+             self.stop if self.max_terms is None else f"{self.stop}, max {self.max_terms}"),
+            ("Stop reason", self.stop_reason_),
+            ("Dependent skipped", f"{self.n_dependent_}"),
+            ("Null MSE (variance)", f"{null:.6g}"),
+            ("Final MSE", f"{final:.6g}"),
+            ("Variance explained", f"{100 * (1 - final / null) if null > 0 else 0:.2f} %"),
+            ("Output offset mu_y", f"{self.offsets_[OUTPUT]:.6g}"),
+        ]
+        notes = [
+            "Terms are products of centred signals: y[n-l] stands for y[n-l] - mu_y."
+            if self.center else "Terms are products of the raw signals.",
+            "Q is the training MSE reduction of each term (FOS eq. 27), in selection order.",
+        ]
+        thin = self._thin()
+        if thin:
+            notes.append(thin[0].upper() + thin[1:] + ".")
+        if spec.levels:
+            notes.append("level@<tau>s is the exponentially weighted mean of the output's past "
+                         "(time constant tau); in a free run it follows the model's own output.")
+        return Summary("Fast Orthogonal Search model", info, table, notes)
+
+    def to_dict(self, meta: Mapping[str, object] | None = None) -> dict:
+        """JSON-serialisable form; :meth:`from_dict` restores a model that predicts identically."""
+        self._check_fitted()
+        return {
+            "format": FORMAT,
+            "format_version": FORMAT_VERSION,
+            "fosmodel_version": __version__,
+            "params": self.get_params(),
+            "fitted": {
+                "terms": list(self.terms_),
+                "coef": [float(c) for c in self.coef_],
+                "intercept": float(self.intercept_),
+                "offsets": {k: float(v) for k, v in self.offsets_.items()},
+                "mse_path": [float(v) for v in self.mse_path_],
+                "q": [float(v) for v in self.q_],
+                "mse_null": float(self.mse_null_),
+                "n_candidates": int(self.n_candidates_),
+                "n_samples": int(self.n_samples_),
+                "stop_reason": self.stop_reason_,
+                "n_dependent": int(self.n_dependent_),
+                "target_name": str(self.target_name_),
+            },
+            "meta": dict(meta or {}),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, object]) -> FOSModel:
+        """Rebuild a fitted model from :meth:`to_dict` output.
+
+        Raises
+        ------
+        InputError
+            Not a fosmodel model, written by a newer format version, or corrupted.
+        """
+        if not isinstance(data, Mapping) or data.get("format") != FORMAT:
+            raise InputError("not a fosmodel FOSModel file (missing or wrong 'format')")
+        version = data.get("format_version")
+        if not isinstance(version, int) or version > FORMAT_VERSION:
+            raise InputError(
+                f"model file format version {version!r} is newer than this fosmodel "
+                f"({__version__}) reads (version {FORMAT_VERSION}); upgrade fosmodel"
+            )
+        try:
+            model = cls(**data["params"])
+            fitted = data["fitted"]
+            spec = model._spec()
+            terms = [Term.parse(name) for name in fitted["terms"]]
+            check_terms_fit_spec(terms, spec)
+            coef = np.asarray(fitted["coef"], dtype=float)
+            if coef.shape != (len(terms),):
+                raise InputError("coefficient count does not match the term count")
+            model.spec_ = spec
+            model._set_terms(terms, coef, float(fitted["intercept"]))
+            model.offsets_ = {str(k): float(v) for k, v in fitted["offsets"].items()}
+            model.mse_path_ = np.asarray(fitted["mse_path"], dtype=float)
+            model.q_ = np.asarray(fitted["q"], dtype=float)
+            model.mse_null_ = float(fitted["mse_null"])
+            model.n_candidates_ = int(fitted["n_candidates"])
+            model.n_samples_ = int(fitted["n_samples"])
+            model.lag_window_ = spec.lag_window
+            model.stop_reason_ = str(fitted["stop_reason"])
+            model.n_dependent_ = int(fitted["n_dependent"])
+            model.target_name_ = str(fitted["target_name"])
+            missing = {OUTPUT, *spec.exog_lags, *spec.columns} - set(model.offsets_)
+            if missing:
+                raise InputError(f"offsets missing for {', '.join(sorted(missing))}")
+        except InputError as exc:
+            raise InputError(f"corrupted model file: {exc}") from None
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InputError(f"corrupted model file: {type(exc).__name__}: {exc}") from None
+        model.meta_ = dict(data.get("meta") or {})
+        return model
+
+
+def _cut(exog: object, names: Sequence[str], n: int, lo: int) -> dict[str, object] | None:
+    """``exog``'s channels ``names`` from sample ``lo`` on (their lengths checked against n)."""
+    if exog is None or not names:
+        return exog
+    out = {}
+    for name in names:
+        if name in exog:
+            values = np.asarray(exog[name])
+            if values.ndim != 1 or len(values) != n:
+                raise InputError(f"channel {name!r} has {values.size} samples, the output has {n}")
+            out[name] = values[lo:]
+    return out or exog
+
+
+def _rest(term: Term | None, signals: Mapping[str, np.ndarray], start: int):
+    """A nonlinear term's input factors over the simulated samples (None: it has none)."""
+    return None if term is None else evaluate_sum([term], [1.0], signals, start)
+
+
+def _refuse_own_input(y: np.ndarray, channels: Mapping[str, np.ndarray]) -> None:
+    """Refuse an input channel equal to y: its lag 0 would be the very value predicted."""
+    for name, x in channels.items():
+        if np.array_equal(x, y):
+            raise InputError(f"input channel {name!r} is the modelled signal itself: its lag 0 is "
+                             "the value predicted (its past is in max_lag)")
+
+
+def _usable(segments: Sequence[slice] | None, n: int, n0: int) -> list[slice]:
+    """The runs of samples to use: ``segments`` (checked) or the whole record, each longer
+    than the lag window."""
+    if segments is None:
+        return [slice(0, n)] if n > n0 else []
+    runs, last = [], 0
+    for s in segments:
+        start, stop = s.start or 0, n if s.stop is None else s.stop
+        if not 0 <= start < stop <= n or start < last:
+            raise InputError(f"segments must be ordered, non-overlapping runs within the "
+                             f"{n} samples; got {s}")
+        last = stop
+        if stop - start > n0:
+            runs.append(slice(start, stop))
+    return runs
+
+
+class BoundModel:
+    """A fitted :class:`FOSModel` with the full-length inputs of one record.
+
+    Code that treats every model alike (the harness, the metrics) calls
+    ``predict(y)`` and ``simulate(y_init, n_steps)`` with the output alone; this
+    supplies the exogenous channels and user columns, cut to the same samples
+    (sample ``n`` of ``y`` is sample ``n`` of the record).
+    """
+
+    def __init__(self, model: FOSModel, inputs: Mapping[str, np.ndarray]) -> None:
+        self.model = model
+        self.inputs = {k: np.asarray(v, dtype=float) for k, v in inputs.items()}
+
+    @property
+    def lag_window_(self) -> int:
+        return self.model.lag_window_
+
+    @property
+    def n_terms_(self) -> int:
+        return self.model.n_terms_
+
+    def is_stable(self) -> bool:
+        return self.model.is_stable()
+
+    def _cut(self, n: int) -> dict[str, np.ndarray] | None:
+        return {k: v[:n] for k, v in self.inputs.items()} if self.inputs else None
+
+    def predict(self, y: object, *, start: int = 0) -> np.ndarray:
+        """One-step prediction of ``y``, the first ``len(y)`` samples of the record (from
+        sample ``start`` on; see :meth:`FOSModel.predict`)."""
+        return self.model.predict(y, self._cut(len(y)), start=start)
+
+    def simulate(self, y_init: object, n_steps: int, noise: object | None = None) -> np.ndarray:
+        """Free run after ``y_init`` (the record's first samples) for ``n_steps`` samples.
+
+        Without levels only the last ``lag_window_`` samples of the past reach
+        the run, so only they (and the inputs from there on) are passed on.
+        """
+        start, n0 = len(y_init), self.lag_window_
+        cut = 0 if self.model.spec_.levels else max(start - n0, 0)
+        inputs = ({k: v[cut : start + n_steps] for k, v in self.inputs.items()}
+                  if self.inputs else None)
+        return self.model.simulate(np.asarray(y_init)[cut:], n_steps, inputs, noise)
+
+    def free_runs(self, y: object, starts: Sequence[int], n_steps: int) -> np.ndarray:
+        """:meth:`FOSModel.free_runs` on the record's first ``len(y)`` samples."""
+        return self.model.free_runs(y, starts, n_steps, self._cut(len(y)))

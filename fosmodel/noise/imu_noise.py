@@ -1,0 +1,492 @@
+"""The noise parameters of a whole IMU: every axis's Allan fit, and the files filters read.
+
+:func:`imu_noise` runs :func:`fosmodel.noise.allan.allan_deviation` and
+:func:`fosmodel.noise.allan.fit_noise` on each column of a record (three gyros and
+three accelerometers, say); :class:`ImuNoise` sets the axes side by side in
+one table and one figure per sensor type, and writes them in SI in the forms
+people paste into a filter or a VIO configuration:
+
+- Kalibr's ``imu.yaml`` (:meth:`ImuNoise.kalibr_yaml`):
+  ``gyroscope_noise_density`` (rad/s/sqrt(Hz)) and
+  ``accelerometer_noise_density`` (m/s^2/sqrt(Hz)) are the white-noise
+  coefficient N; ``gyroscope_random_walk`` (rad/s^2/sqrt(Hz)) and
+  ``accelerometer_random_walk`` (m/s^3/sqrt(Hz)) the rate random walk K.  In
+  Allan terms, N (units*sqrt(s)) *is* the continuous-time noise density
+  (units/sqrt(Hz)), and K (units/sqrt(s)) the density of the bias's
+  driving noise (units/s/sqrt(Hz)); only the units change, by the factor
+  from the record's units to rad/s or m/s^2.
+- MATLAB's ``imuSensor`` parameters (:meth:`ImuNoise.matlab_script`):
+  ``NoiseDensity`` = N, ``BiasInstability`` = B (the IEEE Std 952
+  coefficient, as MathWorks' Allan variance example reads it: the floor
+  divided by 0.664), ``RandomWalk`` = K, per axis.
+- A plain JSON of the same per axis (:meth:`ImuNoise.to_dict`).
+
+A one-number field (Kalibr has one value per sensor) takes the *largest*
+value over the sensor's axes: a filter tuned below an axis's noise
+trusts that axis too much.  A term the fit does not resolve is exported as
+its upper limit, never as 0 (Kalibr refuses a zero random walk, and zero
+would claim a bias that never moves); the files say which values are limits.
+
+Column names tell the sensor and often the units (:func:`infer_axis`):
+``gx``, ``gyro_x``, ``wx``, ``angular_velocity.x`` are gyros, ``ax``,
+``acc_x``, ``linear_acceleration.x`` accelerometers; a suffix ``_dps``,
+``_rads``, ``_g``, ``_mg``, ``_mps2`` gives the units.  What is not in the
+name is given per column (``gx:gyro:deg/s``) or per sensor.
+
+References
+----------
+IEEE Std 952-1997, *IEEE Standard Specification Format Guide and Test
+Procedure for Single-Axis Interferometric Fiber Optic Gyros*, Annex C.
+J. Rehder, J. Nikolic, T. Schneider, T. Hinzmann and R. Siegwart,
+"Extending kalibr: calibrating the extrinsics of multiple IMUs and of
+individual axes", ICRA 2016; Kalibr wiki, "IMU Noise Model".
+MathWorks, "Inertial Sensor Noise Analysis Using Allan Variance" and the
+``gyroparams``/``accelparams`` reference pages.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from .._version import __version__
+from ..core.exceptions import InputError
+from ..io.output import save_figure, write_tables
+from ..models.summary import Summary
+from .allan import AllanResult, NoiseFit, allan_deviation, fit_noise, write_allan
+from .metrics import to_si_scale
+
+SENSORS = ("gyro", "accel")
+#: Exported terms: white noise, bias instability, rate random walk.
+EXPORTED = ("N", "B", "K")
+_SI_UNITS = {
+    "gyro": {"N": "rad/s/sqrt(Hz)", "B": "rad/s", "K": "rad/s^2/sqrt(Hz)"},
+    "accel": {"N": "m/s^2/sqrt(Hz)", "B": "m/s^2", "K": "m/s^3/sqrt(Hz)"},
+}
+#: Name prefixes before the axis letter (``gx``, ``gyro_x``, ``angular_velocity.x``); the
+#: one-letter ones only right before it.
+_PREFIXES = {
+    "gyro": ("gyroscope", "gyro", "gyr", "angular_velocity", "ang_vel", "omega", "g", "w"),
+    "accel": ("accelerometer", "linear_acceleration", "accel", "acc", "a"),
+}
+#: Units spelled in a name after the sensor and axis (``gx_dps``, ``gyro_rad[0]``, ``ax_g``).
+_UNIT_WORDS = {
+    "gyro": {"dps": "deg/s", "degs": "deg/s", "deg_s": "deg/s", "deg": "deg/s",
+             "rads": "rad/s", "rad_s": "rad/s", "radps": "rad/s", "rps": "rad/s",
+             "rad": "rad/s", "dph": "deg/h", "deg_h": "deg/h"},
+    "accel": {"g": "g", "mg": "mg", "mps2": "m/s^2", "ms2": "m/s^2", "m_s2": "m/s^2",
+              "m_s_2": "m/s^2"},
+}
+
+
+@dataclass(frozen=True)
+class Axis:
+    """A column to analyse: its sensor, its units and where each came from."""
+
+    column: str
+    sensor: str
+    units: str
+    told: str  # "given", "from the name", or "from --gyro-units"-like text
+
+    def describe(self) -> str:
+        return f"{self.column}: {self.sensor} in {self.units} ({self.told})"
+
+
+def infer_axis(column: str) -> tuple[str | None, str | None]:
+    """The sensor (``"gyro"``/``"accel"``) and units a column's name tells, or None for each.
+
+    Examples
+    --------
+    >>> infer_axis("gx_dps"), infer_axis("acc_y"), infer_axis("temp")
+    (('gyro', 'deg/s'), ('accel', None), (None, None))
+    """
+    name = column.strip().lower()
+    for sensor, prefixes in _PREFIXES.items():
+        for prefix in prefixes:
+            rest = _after_prefix(name, prefix)
+            if rest is not None:
+                return sensor, _units_in(sensor, rest)
+    return None, None
+
+
+def _after_prefix(name: str, prefix: str) -> str | None:
+    """What follows ``prefix`` and the axis in ``name``, or None if ``name`` is not of it.
+
+    A one-letter prefix must be followed by the axis letter (``gx``, not ``gain``); a longer one
+    by a separator or the axis letter (``gyro_x``, ``gyrox``, ``gyro_rad[0]``).
+    """
+    if not name.startswith(prefix):
+        return None
+    rest = name[len(prefix):]
+    axis = re.match(r"[xyz](?![a-z])", rest)
+    if axis:
+        return rest[axis.end():]
+    if len(prefix) > 1 and rest[:1] in ("_", ".", "-", " ", "[", "("):
+        return rest
+    return None
+
+
+def _units_in(sensor: str, rest: str) -> str | None:
+    """Units named in the rest of a column name: its words, joined by underscores."""
+    words = [w for w in re.split(r"[^a-z0-9]+", rest) if w and w not in ("x", "y", "z")
+             and not w.isdigit()]
+    joined = "_".join(words)
+    for spelled, units in _UNIT_WORDS[sensor].items():
+        if joined == spelled or spelled in words:
+            return units
+    return None
+
+
+def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None) -> list[Axis]:
+    """Each column's sensor and units: given as ``name:sensor:units``, else from its name,
+    with the units of ``units`` (per sensor) where the name does not tell them.
+
+    Raises
+    ------
+    InputError
+        A column whose sensor or units cannot be told (the message says how to give them), an
+        unknown sensor or units, or a column named twice.
+    """
+    units = dict(units or {})
+    out = [_resolve(spec, units) for spec in columns]
+    names = [a.column for a in out]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise InputError(f"column {twice[0]!r} is named twice in --columns")
+    if not out:
+        raise InputError("no columns to analyse")
+    return out
+
+
+def _resolve(spec: str, units: Mapping[str, str]) -> Axis:
+    column, *given = spec.split(":")
+    if given:
+        if len(given) != 2 or not all(given):
+            raise InputError(f"expected COLUMN or COLUMN:SENSOR:UNITS (e.g. gx:gyro:deg/s), "
+                             f"got {spec!r}")
+        to_si_scale(given[0], given[1])  # refuses unknown sensors and units, listing them
+        return Axis(column, given[0], given[1], "given")
+    sensor, named = infer_axis(column)
+    if sensor is None:
+        raise InputError(f"column {column!r}: its name does not tell the sensor; give it as "
+                         f"{column}:gyro:UNITS or {column}:accel:UNITS")
+    if sensor in units:
+        to_si_scale(sensor, units[sensor])
+        return Axis(column, sensor, units[sensor], f"{sensor} from the name, units given")
+    if named is None:
+        raise InputError(f"column {column!r}: a {sensor} by its name, but the name does not "
+                         f"tell its units; give --{sensor}-units or {column}:{sensor}:UNITS")
+    return Axis(column, sensor, named, "from the name")
+
+
+@dataclass(frozen=True)
+class AxisNoise:
+    """One axis: its column, sensor and units, its Allan deviation and its fit."""
+
+    axis: Axis
+    result: AllanResult
+    fit: NoiseFit
+
+    def value(self, term: str) -> tuple[float, str]:
+        """A term's coefficient in the record's units and what it is: ``"fitted"``,
+        ``"upper limit"`` (not resolved) or ``"not fitted"`` (NaN)."""
+        if term not in self.fit.terms:
+            return math.nan, "not fitted"
+        return self.fit.conservative(term)
+
+    def si(self, term: str) -> float:
+        """A term's exported value (:meth:`value`) in SI: rad/s or m/s^2 based."""
+        return self.value(term)[0] * to_si_scale(self.axis.sensor, self.axis.units)
+
+
+@dataclass(frozen=True)
+class ImuNoise:
+    """The Allan noise parameters of several axes of one record."""
+
+    axes: tuple[AxisNoise, ...]
+    rate: float
+    source: str
+
+    def of(self, sensor: str) -> list[AxisNoise]:
+        """The axes of one sensor type, in the order given."""
+        return [a for a in self.axes if a.axis.sensor == sensor]
+
+    def worst(self, sensor: str, term: str) -> tuple[float, AxisNoise] | None:
+        """The largest SI value of a term over a sensor's axes, and its axis (None if none)."""
+        axes = [a for a in self.of(sensor) if math.isfinite(a.si(term))]
+        if not axes:
+            return None
+        top = max(axes, key=lambda a: a.si(term))
+        return top.si(term), top
+
+    def table(self) -> pd.DataFrame:
+        """One row per axis: N, B, K (a limit as "< value") beside the classic read-offs and the
+        datasheet's in-run bias stability, in navigation units; and how the fit follows."""
+        return pd.DataFrame([_row(a) for a in self.axes])
+
+    def si_table(self) -> pd.DataFrame:
+        """One row per axis: the exported values in SI and whether each is a limit."""
+        rows = []
+        for a in self.axes:
+            row = {"Column": a.axis.column, "Sensor": a.axis.sensor}
+            for term in EXPORTED:
+                row[f"{term} ({_SI_UNITS[a.axis.sensor][term]})"] = a.si(term)
+                row[f"{term} is"] = a.value(term)[1]
+            rows.append(row)
+        return pd.DataFrame(rows)
+
+    def summary(self) -> Summary:
+        """The table with the record's facts and how each column's sensor and units were told."""
+        info = [("Source", Path(self.source).name), ("Rate", f"{self.rate:g} Hz"),
+                ("Axes", f"{len(self.axes)}"),
+                ("Samples", f"{self.axes[0].result.n_samples}")]
+        notes = [f"Columns: {'; '.join(a.axis.describe() for a in self.axes)}.",
+                 "N at tau = 1 s on the -1/2 line, K at 3 s on the +1/2 line, B = minimum / "
+                 "0.664 (read-offs); in-run bias stability = the minimum of the deviation "
+                 "(datasheet convention). '<' marks an upper limit (term not resolved)."]
+        for a in self.axes:
+            misses = a.fit.misses()
+            if misses:
+                notes.append(f"WARNING: {a.axis.column}: the fit misses the measured deviation "
+                             f"beyond its 95 % interval at {len(misses)} averaging time(s).")
+        return Summary("Allan noise parameters per axis (IEEE Std 952)", info, self.table(),
+                       notes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Per axis the exported values in SI (with their units and whether each is a limit) and
+        the full fit; per sensor the one-number values (largest axis)."""
+        axes = []
+        for a in self.axes:
+            terms = {}
+            for term in EXPORTED:
+                value, kind = a.value(term)
+                terms[term] = {"value": _finite(a.si(term)),
+                               "units": _SI_UNITS[a.axis.sensor][term], "is": kind,
+                               "record_units_value": _finite(value)}
+            axes.append({"column": a.axis.column, "sensor": a.axis.sensor,
+                         "units": a.axis.units, "told": a.axis.told,
+                         "noise_density": terms["N"], "bias_instability": terms["B"],
+                         "random_walk": terms["K"], "fit": a.fit.to_dict()})
+        return {"source": self.source, "rate_hz": self.rate, "tool": f"fosmodel {__version__}",
+                "axes": axes, "one_number": self._one_number()}
+
+    def _one_number(self) -> dict[str, Any]:
+        out = {}
+        for sensor in SENSORS:
+            for term, field in (("N", "noise_density"), ("K", "random_walk")):
+                top = self.worst(sensor, term)
+                if top is not None:
+                    value, axis = top
+                    out[f"{_KALIBR_NAME[sensor]}_{field}"] = {
+                        "value": value, "units": _SI_UNITS[sensor][term],
+                        "axis": axis.axis.column, "is": axis.value(term)[1]}
+        return out
+
+    def kalibr_yaml(self, rostopic: str = "/imu0") -> str:
+        """Kalibr's ``imu.yaml``: per sensor the largest N and K over its axes, in SI.
+
+        Raises
+        ------
+        InputError
+            The record has no gyro or no accelerometer axis (Kalibr needs both).
+        """
+        missing = [s for s in SENSORS if not self.of(s)]
+        if missing:
+            raise InputError(f"a Kalibr imu.yaml needs gyro and accelerometer axes; there is no "
+                             f"{' and no '.join(missing)} column")
+        lines = [f"# IMU noise for Kalibr, from the Allan deviation of {Path(self.source).name} "
+                 f"({_axes_text(self.axes)}) by fosmodel {__version__}.",
+                 "# Continuous-time densities (Kalibr discretises them with update_rate): "
+                 "noise density = Allan N,",
+                 "# random walk = Allan rate random walk K. One number per sensor: the largest "
+                 "over its axes.", ""]
+        for sensor, title in (("accel", "Accelerometers"), ("gyro", "Gyroscopes")):
+            lines.append(f"# {title}")
+            for term, field in (("N", "noise_density"), ("K", "random_walk")):
+                value, axis = self.worst(sensor, term)
+                kind = axis.value(term)[1]
+                note = "" if kind == "fitted" else f", {kind}: the fit does not resolve it"
+                lines.append(f"{_KALIBR_NAME[sensor]}_{field}: {value:.6e}  "
+                             f"# {_SI_UNITS[sensor][term]}, {axis.axis.column}{note}")
+            lines.append("")
+        lines += [f"rostopic: {rostopic}  # set to the IMU's topic",
+                  f"update_rate: {self.rate:.6g}  # Hz"]
+        return "\n".join(lines) + "\n"
+
+    def matlab_script(self) -> str:
+        """MATLAB ``gyroparams``/``accelparams`` (per axis, SI) and an ``imuSensor``."""
+        lines = [f"% IMU noise from the Allan deviation of {Path(self.source).name} by fosmodel "
+                 f"{__version__}.",
+                 "% NoiseDensity = N, BiasInstability = B (Allan floor 0.664 B), RandomWalk = K; "
+                 "one value per axis in the order given,",
+                 "% or the largest over the axes when a sensor has not exactly three. Upper "
+                 "limits (terms not resolved) are marked."]
+        made = []
+        for sensor, maker in (("gyro", "gyroparams"), ("accel", "accelparams")):
+            axes = self.of(sensor)
+            if not axes:
+                continue
+            lines.append(f"% {sensor}: {', '.join(a.axis.column for a in axes)}")
+            pairs = []
+            for term, prop in (("N", "NoiseDensity"), ("B", "BiasInstability"),
+                               ("K", "RandomWalk")):
+                limits = [a.axis.column for a in axes if a.value(term)[1] != "fitted"]
+                if limits:
+                    lines.append(f"%   {prop}: upper limit on {', '.join(limits)}")
+                pairs.append(f"'{prop}', {_matlab_values(axes, term)}")
+            lines.append(f"{sensor} = {maker}(" + ", ...\n    ".join(pairs) + ");")
+            made.append(sensor)
+        if len(made) == 2:  # imuSensor has no gyro-only or accelerometer-only type
+            lines.append(f"imu = imuSensor('accel-gyro', 'SampleRate', {self.rate:.6g}, "
+                         "'Gyroscope', gyro, 'Accelerometer', accel);")
+        return "\n".join(lines) + "\n"
+
+    def figures(self) -> dict[str, Figure]:
+        """One figure per sensor type: every axis's deviation, band and fitted curve above,
+        fit/data below."""
+        return {sensor: _sensor_figure(self.of(sensor), sensor) for sensor in SENSORS
+                if self.of(sensor)}
+
+
+_KALIBR_NAME = {"gyro": "gyroscope", "accel": "accelerometer"}
+
+
+def _axes_text(axes: Sequence[AxisNoise]) -> str:
+    return ", ".join(a.axis.column for a in axes)
+
+
+def _matlab_values(axes: Sequence[AxisNoise], term: str) -> str:
+    values = [a.si(term) for a in axes]
+    if len(values) != 3:
+        values = [max(values)]
+    text = " ".join(f"{v:.6e}" for v in values)
+    return f"[{text}]" if len(values) > 1 else text
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def _nav_text(fit: NoiseFit, term: str, value: float) -> str:
+    if not math.isfinite(value):
+        return "-"
+    nav = fit.navigation(term, value)
+    return f"{nav[0]:.3g} {nav[1]}" if nav else f"{value:.3g} {fit.units(term)}"
+
+
+def _row(a: AxisNoise) -> dict[str, Any]:
+    fit, res, read = a.fit, a.result, a.fit.readoff
+    row: dict[str, Any] = {"Column": a.axis.column, "Sensor": a.axis.sensor}
+    for term, label in (("N", "N read-off (1 s)"), ("B", "B read-off (min/0.664)"),
+                        ("K", "K read-off (3 s)")):
+        value, kind = a.value(term)
+        prefix = "< " if kind == "upper limit" else ""
+        row[f"{term} fitted"] = prefix + _nav_text(fit, term, value)
+        row[label] = _nav_text(fit, term, read.get(term, math.nan))
+    minimum = read.get("min_adev", math.nan)
+    row["in-run bias stability (min)"] = (f"{_nav_text(fit, 'B', minimum)} at "
+                                          f"{read['min_tau_s']:.3g} s"
+                                          if math.isfinite(minimum) else "-")
+    ratio = fit.model_adev(fit.fitted_taus) / res.adev[fit.start:]
+    row["fit/data min (fitted taus)"], row["max"] = float(ratio.min()), float(ratio.max())
+    row["misses"] = len(fit.misses())
+    return row
+
+
+def _sensor_figure(axes: Sequence[AxisNoise], sensor: str) -> Figure:
+    """Every axis of one sensor in the first axis's units."""
+    units = axes[0].axis.units
+    fig = Figure(figsize=(7.5, 6.6), layout="constrained")
+    top, low = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+    for i, a in enumerate(axes):
+        res, fit, color = a.result, a.fit, f"C{i}"
+        scale = to_si_scale(sensor, a.axis.units) / to_si_scale(sensor, units)
+        top.fill_between(res.taus, scale * res.lower, scale * res.upper, color=color, alpha=0.15)
+        top.loglog(res.taus, scale * res.adev, "o", color=color, ms=3, label=a.axis.column)
+        grid = np.geomspace(res.taus[0], res.taus[-1], 300)
+        top.loglog(grid, scale * fit.model_adev(grid), "-", color=color, lw=1.0)
+        model = fit.model_adev(res.taus)
+        low.semilogx(res.taus, model / res.adev, "o-", color=color, ms=2.5, lw=0.7)
+    top.set_ylabel(f"Allan deviation ({units})")
+    top.set_title(f"{sensor}: overlapping Allan deviation (dots, 68 % bands) and the fitted "
+                  "IEEE Std 952 sums (lines)", fontsize="medium")
+    top.grid(True, which="both", alpha=0.3)
+    top.legend(fontsize="small")
+    low.axhline(1.0, color="0.4", lw=0.8)
+    low.set_xlabel(r"averaging time $\tau$ (s)")
+    low.set_ylabel("fit / data")
+    low.grid(True, which="both", alpha=0.3)
+    return fig
+
+
+def imu_noise(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: float,
+              source: str = "", *, min_tau: float | None = None) -> ImuNoise:
+    """Fit the IEEE Std 952 terms to the Allan deviation of every axis.
+
+    Parameters
+    ----------
+    columns : mapping of str to ndarray
+        The rate signals by column name (each axis's ``column`` must be in it).
+    axes : sequence of Axis
+        The columns with their sensors and units (:func:`resolve_axes`).
+    rate : float
+        Sample rate in Hz.
+    source : str
+        Where the record came from (named in the exported files).
+    min_tau : float, optional
+        Shortest averaging time fitted on every axis (default: found per axis).
+
+    Returns
+    -------
+    ImuNoise
+    """
+    fitted = []
+    for axis in axes:
+        result = allan_deviation(columns[axis.column], rate, units=axis.units,
+                                 sensor=axis.sensor)
+        fitted.append(AxisNoise(axis, result, fit_noise(result, min_tau=min_tau)))
+    return ImuNoise(tuple(fitted), float(rate), source)
+
+
+def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str) -> list[Path]:
+    """The report of several axes in ``out_dir``.
+
+    ``noise.md/csv/tex`` (the table), ``noise_si.md/csv/tex`` (the exported SI values),
+    ``allan_gyro.png/svg`` and ``allan_accel.png/svg``, ``imu_noise.json``,
+    ``imu_params.m`` (MATLAB), ``imu.yaml`` (Kalibr, when there are gyro and accelerometer
+    axes) and each axis's own report in ``axes/<column>/``.
+    """
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = write_tables(noise.table(), out_dir, "noise")
+    paths += write_tables(noise.si_table(), out_dir, "noise_si")
+    for sensor, fig in noise.figures().items():
+        fig.suptitle(title)
+        paths += save_figure(fig, out_dir, f"allan_{sensor}")
+    for a in noise.axes:
+        paths += write_allan(a.result, a.fit, out_dir / "axes" / _safe(a.axis.column),
+                             f"{title}: {a.axis.column}")
+    files = {"imu_noise.json": _json(noise), "imu_params.m": noise.matlab_script()}
+    if all(noise.of(s) for s in SENSORS):
+        files["imu.yaml"] = noise.kalibr_yaml()
+    for name, text in files.items():
+        (out_dir / name).write_text(text)
+        paths.append(out_dir / name)
+    return paths
+
+
+def _safe(column: str) -> str:
+    """A column name as a folder name."""
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", column) or "column"
+
+
+def _json(noise: ImuNoise) -> str:
+    return json.dumps(noise.to_dict(), indent=1) + "\n"

@@ -1,0 +1,427 @@
+"""Train / evaluate / predict harness: every method fit, selected and scored the same way.
+
+As in section 5 of the FOS paper, a record is split by duration into a
+training segment (3 min), an evaluation segment (3 min) and the novel
+prediction segment (the rest).  Every configuration (method, order, degree) is
+fit on the training samples alone; each method's best configuration is the
+one with the lowest one-step MSE on the evaluation segment; every
+configuration is scored on the prediction segment, which no choice has seen.
+
+Two protocols:
+
+``paper``
+    The baselines are fit and scored on denoised data (the paper used a
+    4-level wavelet low pass), FOS on the raw data, as the paper did.
+``fair``
+    Every method is fit and scored on the same raw data.
+
+With ``levels`` (the default), the fair protocol also has every method about
+the local level, the wandering bias as a stochastic level (:mod:`fosmodel.core.levels`):
+``fos+level`` offers FOS the level candidates (a grid below the training
+segment's Allan floor) beside the lags, each weighed freely; ``burg+level``,
+``yw+level``, ``cov+level`` and ``gm+level`` fit the estimator to the record
+minus one level (weight one, :class:`fosmodel.models.levelar.LocalLevelAR`), its time
+constant chosen from the same grid on the evaluation segment like the order.
+
+Denoising is applied to the training samples alone for fitting (so that no
+later sample leaks into a fit through the filter), and to the whole record for
+scoring.  Runtime is measured around ``fit`` only.
+
+A study is a set of independent fits: :func:`plan_study` checks, splits and
+denoises the record and lists the fits (:class:`FitTask`), :func:`run_task`
+fits and scores one with one BLAS thread (so that it gives the same bits in any
+process), and :func:`assemble` makes the rows.  :mod:`fosmodel.study.runner` runs the tasks
+of one or several studies, in this process or on a Dask cluster.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..core.blas import one_blas_thread
+from ..core.exceptions import InputError, UnstableModelWarning
+from ..core.levels import levels_for
+from ..core.validation import as_signal
+from ..models.baselines import METHOD_LABELS, make_baseline
+from ..models.levelar import LocalLevelAR
+from ..models.model import FOSModel
+from ..noise.denoise import DENOISERS, denoise
+from ..noise.metrics import equivalent_position_error, one_step_mse, outage_metrics, to_si_scale
+
+METHODS = ("fos", "yw", "cov", "burg", "gm")
+PROTOCOLS = ("paper", "fair")
+LEVEL = "+level"  # suffix of a method about the local level
+
+
+@dataclass(frozen=True)
+class Split:
+    """Sample ranges of the three segments."""
+
+    train: slice
+    evaluate: slice
+    predict: slice
+
+    @classmethod
+    def by_duration(
+        cls, n: int, rate: float, train_s: float, evaluate_s: float, min_predict: int = 1,
+        why: str = "",
+    ) -> Split:
+        """Split ``n`` samples at ``rate`` Hz: ``train_s`` s, then ``evaluate_s`` s, then the rest.
+
+        Raises
+        ------
+        InputError
+            If a segment is empty or the prediction segment is shorter than ``min_predict``
+            (``why`` says what needs them).
+        """
+        a, b = round(train_s * rate), round((train_s + evaluate_s) * rate)
+        if a < 1 or b <= a:
+            raise InputError(f"the split {train_s:g} s / {evaluate_s:g} s leaves an empty "
+                             "training or evaluation segment")
+        if n - b < min_predict:
+            raise InputError(
+                f"the record has {n} samples ({n / rate:.6g} s at {rate:g} Hz); the split "
+                f"{train_s:g} s / {evaluate_s:g} s leaves {max(n - b, 0)} samples to predict, "
+                f"{min_predict} are needed{why}"
+            )
+        return cls(slice(0, a), slice(a, b), slice(b, n))
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """What a model-order study fits and how it scores.
+
+    Parameters
+    ----------
+    rate : float
+        Sample rate in Hz.
+    sensor, units : str
+        ``"accel"`` or ``"gyro"`` and the record's units (see :mod:`fosmodel.noise.metrics`).
+    orders, degrees : sequence of int
+        Model orders (the maximum lag L) and FOS cross-product degrees.
+    methods : sequence of str
+        Among ``fos, yw, cov, burg, gm``.
+    protocols : sequence of str
+        ``paper`` and/or ``fair``.
+    train_s, evaluate_s : float
+        Segment durations.
+    horizon_s, n_starts, taus : outage metrics (see :func:`fosmodel.noise.metrics.outage_metrics`).
+    paper_denoise : str
+        Denoiser of the baselines under the paper protocol (``wavelet`` or ``kaiser``).
+    fos_stop : str
+        FOS stopping rule.
+    levels : bool
+        Also fit every method about the local level, under the fair protocol.
+    """
+
+    rate: float
+    sensor: str
+    units: str
+    orders: Sequence[int] = tuple(range(1, 11))
+    degrees: Sequence[int] = (1, 2)
+    methods: Sequence[str] = METHODS
+    protocols: Sequence[str] = PROTOCOLS
+    train_s: float = 180.0
+    evaluate_s: float = 180.0
+    horizon_s: float = 30.0
+    n_starts: int = 20
+    taus: Sequence[float] = (1.0, 10.0, 30.0)
+    paper_denoise: str = "wavelet"
+    fos_stop: str = "korenberg"
+    levels: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("orders", "degrees", "methods", "protocols", "taus"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+        if not (np.isfinite(self.rate) and self.rate > 0):
+            raise InputError(f"the sample rate must be positive, got {self.rate!r}")
+        to_si_scale(self.sensor, self.units)
+        _check_choices("method", self.methods, METHODS)
+        _check_choices("protocol", self.protocols, PROTOCOLS)
+        _check_choices("denoiser", [self.paper_denoise], [d for d in DENOISERS if d != "none"])
+        for name, values in (("order", self.orders), ("degree", self.degrees)):
+            if not values or any(isinstance(v, bool) or int(v) != v or v < 1 for v in values):
+                raise InputError(f"every {name} must be an integer >= 1, got {list(values)}")
+        if self.horizon_s <= 0 or self.n_starts < 1:
+            raise InputError("the outage horizon must be positive and n_starts at least 1")
+
+    def configurations(self, protocol: str = "fair") -> list[tuple[str, int, int]]:
+        """Every (method, order, degree) to fit under ``protocol``: FOS at each degree, AR at
+        degree 1, GM once; with ``levels``, under the fair protocol, each again about the
+        local level (method ``<method>+level``)."""
+        out = []
+        level_too = self.levels and protocol == "fair"
+        for method in self.methods:
+            names = [method, method + LEVEL] if level_too else [method]
+            for name in names:
+                if method == "gm":
+                    out.append((name, 1, 1))
+                else:
+                    degrees = self.degrees if method == "fos" else (1,)
+                    out.extend((name, int(L), int(d)) for L in self.orders for d in degrees)
+        return out
+
+    def denoiser(self, protocol: str, method: str) -> str | None:
+        """The denoiser a method's data go through under a protocol (None: raw data)."""
+        return (self.paper_denoise if protocol == "paper" and not method.startswith("fos")
+                else None)
+
+
+def _check_choices(what: str, given: Sequence[str], valid: Sequence[str]) -> None:
+    if not given:
+        raise InputError(f"no {what} given; choose from {', '.join(valid)}")
+    bad = [g for g in given if g not in valid]
+    if bad:
+        raise InputError(f"unknown {what} {bad[0]!r}; choose from {', '.join(valid)}")
+
+
+def make_model(method: str, order: int, degree: int, config: StudyConfig,
+               level_taus: Sequence[float] = (), level_tau: float | None = None):
+    """A fresh, unfitted model of one configuration.
+
+    ``fos+level`` is offered the levels ``level_taus``; a baseline about the level
+    (``burg+level``, ...) uses the one level ``level_tau``.
+    """
+    base, about_level = method.removesuffix(LEVEL), method.endswith(LEVEL)
+    if base == "fos":
+        return FOSModel(max_lag=order, degree=degree, stop=config.fos_stop,
+                        levels=list(level_taus) if about_level else None,
+                        rate=config.rate if about_level else None)
+    model = make_baseline(base, order, rate=config.rate)
+    return LocalLevelAR(model, level_tau, config.rate) if about_level else model
+
+
+def method_label(method: str, degree: int) -> str:
+    """``FOS CP=2``, ``Burg``, ``Burg + level``...: the name of a method in tables and figures."""
+    base = method.removesuffix(LEVEL)
+    label = f"FOS CP={degree}" if base == "fos" else METHOD_LABELS[base]
+    return label + (" + level" if method.endswith(LEVEL) else "")
+
+
+@dataclass
+class StudyResult:
+    """All scored configurations of a study.
+
+    Attributes
+    ----------
+    rows : DataFrame
+        One row per (protocol, method, order, degree): ``evaluate_mse`` (selection),
+        ``mse`` (one-step, prediction segment), ``position_error_m``, ``outage_mse``,
+        ``outage_position_error_m``, ``bias_rms_<tau>s``, ``runtime_s`` (fit only),
+        ``n_terms``, ``stable``, ``data`` (raw or the denoiser).
+    config : StudyConfig
+    split : Split
+    warnings : list of str
+        What deserves the reader's attention (e.g. unstable fitted models).
+    level_taus : tuple of float
+        The level time constants (s) offered about the local level.
+    """
+
+    rows: pd.DataFrame
+    config: StudyConfig
+    split: Split
+    warnings: list[str] = field(default_factory=list)
+    level_taus: tuple[float, ...] = ()
+
+    def best(self) -> pd.DataFrame:
+        """Per protocol and method (FOS per degree), the row with the lowest evaluation MSE
+        (over the orders and, about the level, the level's time constants)."""
+        idx = self.rows.groupby(["protocol", "method", "degree"], sort=False)["evaluate_mse"]
+        return self.rows.loc[idx.idxmin()].reset_index(drop=True)
+
+    def to_json_dict(self) -> dict:
+        """Rows and best rows with the keys of ``fosmodel study --json``."""
+        def records(frame):
+            out = []
+            for rec in frame.to_dict(orient="records"):
+                rec = {k: _json_value(v) for k, v in rec.items()}
+                rec["bias_rms"] = {f"{t:g}": rec.pop(f"bias_rms_{t:g}s") for t in self.config.taus}
+                out.append(rec)
+            return out
+
+        cfg = asdict(self.config)
+        return {"config": cfg,
+                "split_samples": {k: [s.start, s.stop] for k, s in asdict(self.split).items()},
+                "rows": records(self.rows), "best": records(self.best()),
+                "warnings": list(self.warnings), "level_taus_s": list(self.level_taus)}
+
+
+def _json_value(v: object) -> object:
+    """Python scalars for JSON; NaN (e.g. an unstable model's outage error) becomes null."""
+    if isinstance(v, (np.floating, float)):
+        return float(v) if np.isfinite(v) else None
+    return v.item() if isinstance(v, np.generic) else v
+
+
+@dataclass(frozen=True)
+class FitTask:
+    """One fit of a study: a configuration and the data it is fit and scored on.
+
+    FOS sees the raw data under both protocols, so it is one task for both rows.
+
+    Attributes
+    ----------
+    method : str
+    order, degree : int
+    denoiser : str or None
+        The denoiser of the data (None: raw data).
+    level_tau : float, optional
+        The level's time constant (s) of a baseline about the level.
+    """
+
+    method: str
+    order: int
+    degree: int
+    denoiser: str | None
+    level_tau: float | None = None
+
+
+@dataclass(frozen=True)
+class FitScore:
+    """The outcome of one :class:`FitTask`: its scores and what deserves attention."""
+
+    row: dict[str, object]
+    notes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class StudyPlan:
+    """A study split into independent fits, with the data they need.
+
+    Attributes
+    ----------
+    config : StudyConfig
+    split : Split
+    signals : dict of str or None to (ndarray, ndarray)
+        Per denoiser (None: raw data), the training samples to fit on and the
+        whole record to score against.
+    tasks : tuple of FitTask
+        Every distinct fit, in the order the rows first need it.
+    level_taus : tuple of float
+        The level time constants (s) offered, chosen from the training segment.
+    """
+
+    config: StudyConfig
+    split: Split
+    signals: dict[str | None, tuple[np.ndarray, np.ndarray]]
+    tasks: tuple[FitTask, ...]
+    level_taus: tuple[float, ...] = ()
+
+    def __reduce__(self) -> tuple:
+        return _unpickle_plan, (self.config, self.split, self.signals, self.tasks,
+                                self.level_taus)
+
+
+def _unpickle_plan(config, split, signals, tasks, level_taus=()) -> StudyPlan:
+    """A plan with its own copy of the signals.
+
+    Unpickled arrays may lie at any byte offset of a received buffer (Dask's
+    frames), and numpy sums arrays that are not 8-byte aligned in another
+    order: the results would differ from this process's in the last bit.
+    """
+    signals = {d: tuple(np.array(a) for a in pair) for d, pair in signals.items()}
+    return StudyPlan(config, split, signals, tasks, level_taus)
+
+
+def plan_study(y: object, config: StudyConfig) -> StudyPlan:
+    """Check and split the record ``y``, denoise it as the protocols need, list the fits.
+
+    Raises
+    ------
+    InputError
+        If the record is not a finite signal or too short for the split.
+    """
+    y = as_signal(y, "the record")
+    horizon, tau = round(config.horizon_s * config.rate), max(config.taus)
+    split = Split.by_duration(
+        len(y), config.rate, config.train_s, config.evaluate_s,
+        min_predict=max(horizon + 1, 2 * round(tau * config.rate)),
+        why=f" (a {config.horizon_s:g} s outage horizon and two {tau:g} s bias windows)")
+    level_taus = levels_for(y[split.train], config.rate) if config.levels else ()
+    tasks = tuple(dict.fromkeys(task for _, task in _row_tasks(config, level_taus)))
+    signals = {d: _signals(y, split, d, config.rate)
+               for d in dict.fromkeys(t.denoiser for t in tasks)}
+    return StudyPlan(config, split, signals, tasks, tuple(level_taus))
+
+
+def _row_tasks(config: StudyConfig, level_taus: Sequence[float]) -> list[tuple[str, FitTask]]:
+    """(protocol, task) of every row of the study, in row order: a baseline about the level
+    once per level time constant."""
+    out = []
+    for protocol in config.protocols:
+        for method, order, degree in config.configurations(protocol):
+            denoiser = config.denoiser(protocol, method)
+            taus = (level_taus if method.endswith(LEVEL) and method != "fos" + LEVEL
+                    else [None])
+            out += [(protocol, FitTask(method, order, degree, denoiser, tau)) for tau in taus]
+    return out
+
+
+def run_task(plan: StudyPlan, task: FitTask) -> FitScore:
+    """Fit and score one task of ``plan``, with one BLAS thread.
+
+    It depends on nothing but its arguments, so it gives the same numbers
+    (runtime aside) in this process or on any worker.
+    """
+    with one_blas_thread():
+        return _score(task, *plan.signals[task.denoiser], plan.split, plan.config,
+                      plan.level_taus)
+
+
+def assemble(plan: StudyPlan, scores: Sequence[FitScore]) -> StudyResult:
+    """The study result from the scores of ``plan.tasks``, in the same order."""
+    if len(scores) != len(plan.tasks):
+        raise ValueError(f"{len(scores)} scores for {len(plan.tasks)} tasks")
+    scored = dict(zip(plan.tasks, scores))
+    rows = [{"protocol": protocol, "method": task.method,
+             "label": method_label(task.method, task.degree), "order": task.order,
+             "degree": task.degree, "data": task.denoiser or "raw",
+             "level_tau_s": np.nan if task.level_tau is None else task.level_tau,
+             **scored[task].row}
+            for protocol, task in _row_tasks(plan.config, plan.level_taus)]
+    notes = sorted({note for score in scores for note in score.notes})
+    return StudyResult(pd.DataFrame(rows), plan.config, plan.split, notes, plan.level_taus)
+
+
+def _signals(y, split, denoiser, rate) -> tuple[np.ndarray, np.ndarray]:
+    """(samples to fit on, samples to score against) for one kind of data."""
+    train = y[split.train]
+    if denoiser is None:
+        return train, y
+    return denoise(train, rate, denoiser), denoise(y, rate, denoiser)
+
+
+def _score(task: FitTask, fit_signal, score_signal, split, config, level_taus) -> FitScore:
+    model = make_model(task.method, task.order, task.degree, config, level_taus,
+                       task.level_tau)
+    t0 = time.perf_counter()
+    model.fit(fit_signal)
+    runtime = time.perf_counter() - t0
+    label = f"{method_label(task.method, task.degree)} (L={task.order})"
+    stable = model.is_stable()
+    notes = () if stable else (
+        f"{label}: the fitted model is unstable; its free-run metrics are NaN",)
+    pred = model.predict(score_signal)
+    residual = (score_signal - pred)[split.predict]
+    mse = one_step_mse(score_signal, pred, split.predict)
+    row = {
+        "evaluate_mse": one_step_mse(score_signal, pred, split.evaluate),
+        "mse": mse,
+        "position_error_m": equivalent_position_error(mse, config.sensor, config.units),
+    }
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnstableModelWarning)  # reported once, above
+        outage = outage_metrics(model, score_signal, config.rate, config.sensor, config.units,
+                                split.predict, horizon_s=config.horizon_s,
+                                n_starts=config.n_starts, taus=config.taus, residual=residual)
+    row["outage_mse"] = outage["outage_mse"] if stable else np.nan
+    row["outage_position_error_m"] = outage["outage_position_error_m"] if stable else np.nan
+    row.update({f"bias_rms_{t:g}s": outage["bias_rms"][t] for t in config.taus})
+    row.update(runtime_s=runtime, n_terms=int(model.n_terms_), stable=stable)
+    return FitScore(row, notes)

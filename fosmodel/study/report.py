@@ -1,0 +1,170 @@
+"""Study reports: tables (Markdown, CSV, LaTeX) and figures (PNG, SVG) for papers and reports.
+
+The comparison table follows the layout of the FOS paper's Tables 1-2 (a block
+per model order, a row per method) with the outage metrics added; the figure
+is the paper's Figures 6-7 (prediction MSE against model order, log scale)
+with the 30 s outage position error beside it.  Every file is written
+atomically.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+from matplotlib.figure import Figure
+
+from ..io.output import save_figure, write_tables, write_text
+from ..models.summary import markdown_table
+from .harness import LEVEL, StudyResult, method_label
+
+_ORDER = ["yw", "cov", "burg", "gm", "fos"]
+
+
+def _headers(result: StudyResult) -> dict[str, str]:
+    u = result.config.units
+    cols = {
+        "label": "Method", "data": "Data", "order": "Order L", "mse": f"MSE ({u})^2",
+        "position_error_m": "Position error (m)", "outage_mse": f"Outage MSE ({u})^2",
+        "outage_position_error_m": f"Outage position error (m, {result.config.horizon_s:g} s)",
+    }
+    cols.update({f"bias_rms_{t:g}s": f"Bias RMS {t:g} s ({u})" for t in result.config.taus})
+    cols.update(runtime_s="Fit time (s)", n_terms="Terms")
+    return cols
+
+
+def study_table(result: StudyResult, frame: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Every scored configuration (or the rows of ``frame``), with readable headers."""
+    frame = result.rows if frame is None else frame
+    cols = {"protocol": "Protocol", "degree": "CP", "evaluate_mse": "Evaluate MSE",
+            **_headers(result)}
+    return frame[list(cols)].rename(columns=cols)
+
+
+def paper_table(result: StudyResult, orders: tuple[int, ...] = (1, 10)) -> pd.DataFrame:
+    """The paper's Table 1/2 layout: per model order, every method and the data it was fit on.
+
+    FOS is fit on the raw data under both protocols, so it appears once; the
+    baselines appear on denoised data (paper protocol) and on raw data (fair).
+    Gauss-Markov is a first-order model and appears in the order-1 block.
+    """
+    rows = result.rows[~result.rows["method"].str.endswith(LEVEL)]
+    rows = rows[rows["order"].isin(orders) | (rows["method"] == "gm")]
+    rows = rows.drop_duplicates(subset=["method", "order", "degree", "data"])
+    blocks = []
+    for order in orders:
+        block = rows[(rows["order"] == order) & ((rows["method"] != "gm") | (order == min(orders)))]
+        block = block.assign(_m=block["method"].map(_ORDER.index)).sort_values(
+            ["_m", "degree", "data"], kind="stable")
+        blocks.append(block.assign(order=order))
+    frame = pd.concat(blocks) if blocks else rows.iloc[:0]
+    cols = _headers(result)
+    keep = ["order", "label", "data", "mse", "position_error_m", "outage_position_error_m",
+            f"bias_rms_{max(result.config.taus):g}s", "runtime_s", "n_terms"]
+    return frame[keep].rename(columns=cols).reset_index(drop=True)
+
+
+def level_table(result: StudyResult) -> pd.DataFrame:
+    """Fair protocol: each method's best configuration as it is and about the local level.
+
+    FOS about the level is offered level candidates it weighs freely; a baseline
+    about the level is fitted to the record minus one level (weight one), whose
+    time constant is chosen on the evaluation segment with the order.
+    """
+    best = result.best()
+    best = best[best["protocol"] == "fair"]
+    cols = _headers(result)
+    keep = ["label", "order", "level_tau_s", "mse", "outage_position_error_m",
+            f"bias_rms_{max(result.config.taus):g}s", "n_terms"]
+    frame = best.assign(_level=best["method"].str.endswith(LEVEL)).sort_values(
+        ["_level", "method", "degree"], kind="stable")
+    return frame[keep].rename(columns={**cols, "level_tau_s": "Level tau (s)"}).reset_index(
+        drop=True)
+
+
+def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
+    """One-step prediction MSE and outage position error against model order, per method."""
+    cfg = result.config
+    rows = result.rows[result.rows["protocol"] == protocol]
+    # about the level a baseline has a row per time constant: the one chosen on evaluation
+    rows = rows.loc[rows.groupby(["method", "order", "degree"], sort=False)["evaluate_mse"]
+                    .idxmin()]
+    fig = Figure(figsize=(10, 4.2), layout="constrained")
+    axes = fig.subplots(1, 2)
+    for ax, col, ylabel in (
+        (axes[0], "mse", f"one-step prediction MSE ({cfg.units})$^2$"),
+        (axes[1], "outage_position_error_m",
+         f"position error after a {cfg.horizon_s:g} s outage (m)"),
+    ):
+        for (method, degree), group in rows.groupby(["method", "degree"], sort=False):
+            label = method_label(method, degree)
+            if method.removesuffix(LEVEL) == "gm":
+                ax.axhline(group[col].iloc[0], ls="--" if method == "gm" else ":", color="0.5",
+                           label=label)
+            else:
+                group = group.sort_values("order")
+                ax.plot(group["order"], group[col], marker="o", label=label)
+        ax.set_yscale("log")
+        ax.set_xlabel("model order (maximum lag L)")
+        ax.set_ylabel(ylabel)
+        ax.set_xticks(sorted(rows["order"].unique()))
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize="small")
+    fig.suptitle(f"{title}: {protocol} protocol")
+    return fig
+
+
+def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
+    """Every table and figure of a study, plus ``report.md`` that shows them."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = write_tables(paper_table(result), out_dir, "comparison")
+    paths += write_tables(study_table(result), out_dir, "study")
+    paths += write_tables(study_table(result, result.best()), out_dir, "best")
+    if result.config.levels and "fair" in result.config.protocols:
+        paths += write_tables(level_table(result), out_dir, "level")
+    figures = []
+    for protocol in result.config.protocols:
+        figures += save_figure(order_figure(result, protocol, title), out_dir, f"order_{protocol}")
+    paths += figures
+    paths.append(out_dir / "report.md")
+    write_text(paths[-1], report_markdown(result, title))
+    return paths
+
+
+def report_markdown(result: StudyResult, title: str) -> str:
+    """The study as one Markdown page: setup, comparison table, best rows, figures, warnings."""
+    cfg, split = result.config, result.split
+    n = split.predict.stop
+    lines = [
+        f"# {title}", "",
+        f"{n} samples at {cfg.rate:g} Hz ({n / cfg.rate:.6g} s), {cfg.sensor}, units {cfg.units}. "
+        f"Training {cfg.train_s:g} s, evaluation {cfg.evaluate_s:g} s, prediction "
+        f"{(split.predict.stop - split.predict.start) / cfg.rate:.6g} s. Orders "
+        f"{min(cfg.orders)}-{max(cfg.orders)}, FOS degrees {', '.join(map(str, cfg.degrees))}, "
+        f"FOS stop rule {cfg.fos_stop}. Paper protocol: baselines on {cfg.paper_denoise}-"
+        "denoised data, FOS on raw data; fair protocol: every method on raw data. Errors are "
+        "one-step prediction errors on the prediction segment; outage metrics are free runs of "
+        f"{cfg.horizon_s:g} s from {cfg.n_starts} starts across it.", "",
+        "## Comparison (FOS paper, Tables 1-2 layout)", "",
+        markdown_table(paper_table(result), digits=4), "",
+        "## Best configuration per method (chosen on the evaluation segment)", "",
+        markdown_table(study_table(result, result.best()), digits=4), "",
+    ]
+    if cfg.levels and "fair" in cfg.protocols:
+        taus = ", ".join(f"{t:g}" for t in result.level_taus) or "none (record too short)"
+        lines += [
+            "## About the local level (fair protocol)", "",
+            "The wandering bias as a stochastic level (the exponentially weighted mean of the "
+            "output's past, time constants " + taus + " s, chosen below the training "
+            "segment's Allan floor). FOS + level: FOS offered these levels beside its lags, "
+            "each weighed freely. Baseline + level: the estimator fitted to the record minus "
+            "one level (weight one), the level's time constant chosen on the evaluation "
+            "segment with the order. Compare each method with its own + level row, and FOS + "
+            "level with the best baseline + level.", "",
+            markdown_table(level_table(result), digits=4), ""]
+    for protocol in cfg.protocols:
+        lines += [f"![{protocol} protocol](order_{protocol}.png)", ""]
+    if result.warnings:
+        lines += ["## Warnings", "", *[f"- {w}" for w in result.warnings], ""]
+    lines += ["All rows: `study.csv` (also `.md`, `.tex`).", ""]
+    return "\n".join(lines)
