@@ -100,7 +100,7 @@ def test_internal_error_exit_1_with_hint(record, tmp_path, capsys, monkeypatch):
     def boom(*args, **kwargs):
         raise RuntimeError("unexpected")
 
-    monkeypatch.setattr(cli, "load_record", boom)
+    monkeypatch.setattr(cli.commands, "load_record", boom)
     code, _, err = _run(["fit", record, "--column", "gyro_y", "--out", tmp_path / "m.json"], capsys)
     assert code == 1 and "internal error: RuntimeError: unexpected" in err and "report" in err
 

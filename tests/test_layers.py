@@ -37,8 +37,10 @@ def _imports(path: Path) -> set[str]:
             if node.level:
                 up = package.split(".")[: len(package.split(".")) - node.level + 1]
                 base = ".".join([*up, base] if base else up)
-            found.add(base)
-            found.update(f"{base}.{a.name}" for a in node.names)
+            modules = {f"{base}.{a.name}" for a in node.names}
+            found.update(modules)
+            if any(_module_path(m) is None for m in modules):  # a name of base, not a module
+                found.add(base)
     return {m for m in found if m.split(".")[0] in ("fosmodel", "data_synth")
             and _module_path(m) is not None}
 

@@ -180,7 +180,14 @@ class FOSModel(BaseEstimator):
 
     # -- fitting -------------------------------------------------------------------------
 
-    def _spec(self) -> CandidateSpec:
+    def candidate_spec(self) -> CandidateSpec:
+        """The candidate set these parameters offer (checked; nothing is fitted).
+
+        Raises
+        ------
+        InputError
+            Parameters that do not make a candidate set (e.g. levels without a rate).
+        """
         spec = CandidateSpec(self.max_lag, self.degree, self.exog_lags or {}, self.columns or (),
                              levels=self.levels or (), product_lags=self.product_lags)
         check_level_rate(spec.levels, self.rate)
@@ -207,7 +214,7 @@ class FOSModel(BaseEstimator):
         -------
         self
         """
-        spec = self._spec()
+        spec = self.candidate_spec()
         rule = StopRule(self.stop, self.tol, self.max_terms)
         if self.correlations not in ("fast", "reference"):
             raise InputError(
@@ -296,7 +303,7 @@ class FOSModel(BaseEstimator):
         from sample ``lo`` on."""
         if exog is None:
             return {}
-        names = [n for n in self._spec().level_names if n in set(map(str, exog.keys()))]
+        names = [n for n in self.candidate_spec().level_names if n in set(map(str, exog.keys()))]
         return {n: check_level_series(exog[n], y, level_tau(n), self.rate, n)[lo:] - mu
                 for n in names}
 
@@ -685,7 +692,7 @@ class FOSModel(BaseEstimator):
         try:
             model = cls(**data["params"])
             fitted = data["fitted"]
-            spec = model._spec()
+            spec = model.candidate_spec()
             terms = [Term.parse(name) for name in fitted["terms"]]
             check_terms_fit_spec(terms, spec)
             coef = np.asarray(fitted["coef"], dtype=float)

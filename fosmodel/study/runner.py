@@ -10,6 +10,7 @@ optional extra).
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from collections.abc import Sequence
 
@@ -79,3 +80,25 @@ def run_study(
     StudyResult
     """
     return run_studies([plan_study(y, config)], client=client, progress=progress)[0]
+
+
+def dask_client(scheduler: str | None = None, workers: int | None = None,
+                timeout: float = 10.0) -> contextlib.AbstractContextManager:
+    """A context giving the Dask client for :func:`run_studies`: of the scheduler at the address
+    ``scheduler``, or of a local cluster of ``workers`` single-threaded processes; None (run in
+    this process) with neither.
+
+    Raises
+    ------
+    ImportError
+        Dask is not installed (the message names the extra to install).
+    """
+    if scheduler:
+        from .distributed import connect
+
+        return connect(scheduler, timeout)
+    if workers:
+        from .distributed import local_client
+
+        return local_client(workers)
+    return contextlib.nullcontext()

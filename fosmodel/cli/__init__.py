@@ -1,0 +1,56 @@
+"""Command line: ``fosmodel fit | predict | study | close-loop | allan | synth | demo``.
+
+A thin layer over the library: :mod:`.parser` holds the grammar, :mod:`.commands` one
+short function per command over public library functions, and :func:`main` the exit codes:
+0 success, 2 bad input or usage (one-line message on stderr), 1 internal error (with a
+hint to report it; ``--verbose`` shows the traceback), 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+import traceback
+import warnings
+
+from ..core.exceptions import InputError
+from .parser import build_parser
+
+__all__ = ["build_parser", "main"]
+
+
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """A warning as the command line shows it: one line, like its notes and errors."""
+    return f"fosmodel: warning: {' '.join(str(message).split())}\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    shown, warnings.formatwarning = warnings.formatwarning, _one_line_warning
+    try:
+        return _run(args)
+    finally:
+        warnings.formatwarning = shown
+
+
+def _run(args: argparse.Namespace) -> int:
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                        format="fosmodel: %(message)s", stream=sys.stderr)
+    try:
+        return args.func(args)
+    except InputError as exc:
+        print(f"fosmodel: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("fosmodel: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug: say so, briefly, and how to get details
+        if args.verbose:
+            traceback.print_exc()
+        print(f"fosmodel: internal error: {type(exc).__name__}: {' '.join(str(exc).split())} "
+              "(this is a bug; please report it with the command you ran; "
+              "--verbose shows the traceback)", file=sys.stderr)
+        return 1

@@ -1,0 +1,7 @@
+"""``python -m fosmodel.cli``: the command line."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

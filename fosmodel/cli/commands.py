@@ -1,0 +1,297 @@
+"""One short function per command, each over public library functions.
+
+A command checks its outputs before it reads anything (no output may name an input),
+reads only the columns it uses, and writes every file atomically; its errors are
+:class:`~fosmodel.core.exceptions.InputError`, which :func:`fosmodel.cli.main` prints in
+one line with exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..core.candidates import count_candidates
+from ..core.exceptions import InputError
+from ..core.levels import levels_for
+from ..io.loader import Record, load_record, parse_scales
+from ..io.model_file import read_model, write_model
+from ..io.output import atomic_write, refuse_overwrite, report_directory, write_text
+from ..models.model import FOSModel
+
+
+def _out_path(path: str) -> Path:
+    out = Path(path)
+    if not out.parent.is_dir():
+        raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
+    if out.is_dir():
+        raise InputError(f"cannot write {out}: it is a directory")
+    return out
+
+
+def _out_dir(path: str) -> Path:
+    """The output directory of a report: created on success, so it must not be a file."""
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"cannot write a report into {out}: it is a file, not a directory")
+    return out
+
+
+def _load(args: argparse.Namespace, path: str | None = None,
+          columns: list[str] | None = None) -> Record:
+    """The record of ``path`` (default ``args.file``) with the loader options.
+
+    Only ``columns`` (default: all) are read and checked.  Its notes go to
+    stderr, after the file's name when ``path`` is given.
+    """
+    rec = load_record(path or args.file, columns=columns, rate=args.rate,
+                      scale=parse_scales(args.scale or []), uniform=args.uniform,
+                      outliers=args.outliers, gaps=args.gaps)
+    for note in rec.notes:
+        print(f"fosmodel: note: {path + ': ' if path else ''}{note}", file=sys.stderr)
+    return rec
+
+
+def fit(args: argparse.Namespace) -> int:
+    out = _out_path(args.out)
+    refuse_overwrite({"--out": out}, {"the record": args.file})
+    exog_lags = dict(args.exog or [])
+    if args.column in exog_lags:
+        raise InputError(f"--exog {args.column}:{exog_lags[args.column]}: the modelled column "
+                         "cannot be its own input (its lag 0 is the value predicted; its past "
+                         "is in --max-lag)")
+    rec = _load(args, columns=[args.column, *exog_lags])
+    y = rec.column(args.column)
+    levels = args.levels
+    if levels == "auto":
+        levels = list(levels_for(y, rec.require_rate()))
+        print("levels offered (below the Allan floor): "
+              + ", ".join(f"{t:g} s" for t in levels))
+    model = FOSModel(max_lag=args.max_lag, degree=args.degree, exog_lags=exog_lags,
+                     levels=levels, rate=rec.require_rate() if levels else None,
+                     max_terms=args.max_terms, stop=args.stop, tol=args.tol,
+                     max_candidates=args.max_candidates)
+    spec = model.candidate_spec()
+    print(f"candidates: {count_candidates(spec)} (L={spec.max_lag}, CP={spec.degree}"
+          + "".join(f", {k}:0-{v}" for k, v in exog_lags.items()) + ")")
+    exog = {name: rec.column(name) for name in exog_lags}
+    model.fit(pd.Series(y, name=args.column), exog, segments=rec.segments)
+    print(model.summary())
+    meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
+            "n_samples": rec.n_samples}
+    write_model(out, model, meta)
+    print(f"model written to {out}")
+    return 0
+
+
+def predict(args: argparse.Namespace) -> int:
+    out = _out_path(args.out)
+    refuse_overwrite({"--out": out}, {"the record": args.file, "the model": args.model})
+    model = read_model(args.model)
+    column = args.column or model.meta_.get("column")
+    if not column:
+        raise InputError("the model does not say which column it models; pass --column")
+    inputs = model.input_columns()
+    rec = _load(args, columns=[column, *inputs])
+    y = rec.column(column)
+    channels = {name: rec.column(name) for name in inputs}
+    pred = model.predict(y, channels, segments=rec.segments)
+    resid = (y - pred)[~np.isnan(pred)]  # NaN over the lag window of each segment
+    if not resid.size:
+        pieces = f" in {len(rec.segments)} segments" if rec.segments else ""
+        raise InputError(f"{rec.source}: record too short: {rec.n_samples} samples{pieces}, but "
+                         f"the model's lag window needs {model.lag_window_} before the first "
+                         "prediction")
+    frame = pd.DataFrame({column: y, "prediction": pred, "residual": y - pred})
+    if rec.time is not None:
+        frame.insert(0, "time", rec.time)
+    with atomic_write(out) as fh:
+        frame.to_csv(fh, index=False, float_format="%.10g")
+    mse = float(np.mean(resid**2))
+    print(f"one-step prediction of {column!r} on {rec.source}: {resid.size} samples, MSE {mse:.6g}")
+    print(f"predictions written to {out}")
+    return 0
+
+
+def _check_dask(args: argparse.Namespace) -> None:
+    """Refuse ``--scheduler``/``--workers`` before any work when the extra is missing."""
+    if args.scheduler or args.workers:
+        try:
+            importlib.import_module("fosmodel.study.distributed")
+        except ImportError as exc:
+            flag = "--scheduler" if args.scheduler else "--workers"
+            raise InputError(f"{flag}: {exc}") from None
+
+
+def study(args: argparse.Namespace) -> int:
+    from ..study.files import (
+        check_report_names,
+        overview,
+        plan_columns,
+        studies_json,
+        write_reports,
+    )
+    from ..study.harness import StudyConfig
+    from ..study.runner import dask_client, run_studies
+
+    _check_dask(args)
+    json_path = _out_path(args.json) if args.json else None
+    out = _out_dir(args.out)
+    refuse_overwrite({"--json": json_path}, {f"the record {i + 1}": f
+                                             for i, f in enumerate(args.files)})
+    if not args.columns:
+        raise InputError("no column given; pass --columns COL[,COL...]")
+    check_report_names(args.files, args.columns)
+    studies = []
+    for path in args.files:
+        rec = _load(args, path, columns=args.columns)
+        config = StudyConfig(
+            rate=rec.require_rate(), sensor=args.sensor, units=args.units, orders=args.orders,
+            degrees=args.degrees, methods=args.methods,
+            protocols=["paper", "fair"] if args.protocol == "both" else [args.protocol],
+            train_s=args.split[0], evaluate_s=args.split[1], horizon_s=args.horizon,
+            n_starts=args.starts, paper_denoise=args.denoise, fos_stop=args.stop,
+            levels=not args.no_levels)
+        studies += plan_columns(rec, path, args.columns, config)
+    with dask_client(args.scheduler, args.workers, args.connect_timeout) as client:
+        results = run_studies([s.plan for s in studies], client=client,
+                              progress=sys.stderr.isatty())
+    write_reports(studies, results, out, args.title, args.files)
+    print(overview(studies, results).to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    for s, result in zip(studies, results):
+        for note in result.warnings:
+            print(f"fosmodel: warning: {'' if len(studies) == 1 else s.name + ': '}{note}",
+                  file=sys.stderr)
+    if json_path:
+        write_text(json_path, json.dumps(studies_json(studies, results), indent=1) + "\n")
+    fits = sum(len(result.rows) for result in results)
+    count = "" if len(studies) == 1 else f"{len(studies)} records, "
+    print(f"study of {count}{fits} fits written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else ""))
+    return 0
+
+
+def close_loop(args: argparse.Namespace) -> int:
+    from ..loop.closeloop import LoopConfig
+    from ..loop.closeloop import close_loop as run_loop
+    from ..loop.loop_report import effects_table, write_loop_report
+
+    json_path = _out_path(args.json) if args.json else None
+    model_path = _out_path(args.model) if args.model else None
+    out = _out_dir(args.out)
+    refuse_overwrite({"--json": json_path, "--model": model_path}, {"the record": args.file})
+    if args.aux is not None and args.column in args.aux:
+        raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
+                         "residual (its lag 0 is the value predicted)")
+    rec = _load(args, columns=None if args.aux is None else [args.column, *args.aux])
+    rec.require_contiguous("the residual loop")
+    y = rec.column(args.column)
+    aux = args.aux if args.aux is not None else [c for c in rec.names if c != args.column]
+    channels = {name: rec.column(name) for name in aux}
+    config = LoopConfig(rate=rec.require_rate(), sensor=args.sensor, units=args.units,
+                        max_lag=args.max_lag, train=args.split[0], evaluate=args.split[1])
+    result = run_loop(y, channels, config,
+                      progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,
+                                                  flush=True))
+    with report_directory(out, [args.file]) as tmp:
+        write_loop_report(result, tmp, args.title or f"{args.column} of {Path(args.file).name}")
+    if model_path:
+        meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
+                "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment",
+                "effects": [step.effect.describe() for step in result.steps]}
+        write_model(model_path, result.final_model.model, meta)
+    print(effects_table(result).drop(columns=["Evidence"]).to_string(
+        index=False, float_format=lambda v: f"{v:.4g}"))
+    if result.unexplained:
+        print(f"still firing, with no effect that survives: {', '.join(result.unexplained)}")
+    if json_path:
+        write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
+    print(f"residual loop report written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else "")
+          + (f"; final model written to {model_path}" if model_path else ""))
+    return 0
+
+
+def allan(args: argparse.Namespace) -> int:
+    if args.columns:
+        return _allan_axes(args)
+    if args.gyro_units or args.accel_units:
+        raise InputError("--gyro-units and --accel-units go with --columns; give --sensor and "
+                         "--units with --column")
+    from ..noise.allan import allan_deviation, fit_noise, write_allan
+
+    json_path = _out_path(args.json) if args.json else None
+    out = _out_dir(args.out)
+    refuse_overwrite({"--json": json_path}, {"the record": args.file})
+    rec = _load(args, columns=[args.column])
+    rec.require_contiguous("the Allan deviation")
+    y = rec.column(args.column)
+    result = allan_deviation(y, rec.require_rate(), units=args.units, sensor=args.sensor)
+    fit = fit_noise(result, min_tau=args.min_tau)
+    with report_directory(out, [args.file]) as tmp:
+        write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}")
+    print(fit.summary())
+    misses = fit.misses()
+    if misses:
+        tau, ratio = misses[0]
+        print(f"warning: the IEEE Std 952 fit misses the measured Allan deviation beyond its "
+              f"95 % interval at {len(misses)} averaging time(s) (fit/data {ratio:.2f} "
+              f"at tau = {tau:.3g} s first); see the figure's lower panel", file=sys.stderr)
+    if json_path:
+        data = {"source": rec.source, "column": args.column, "allan": result.to_dict(),
+                "noise": fit.to_dict()}
+        write_text(json_path, json.dumps(data, indent=1) + "\n")
+    print(f"Allan variance report written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else ""))
+    return 0
+
+
+def _allan_axes(args: argparse.Namespace) -> int:
+    from ..noise.imu_noise import imu_noise, resolve_axes, write_imu_noise
+
+    if args.sensor or args.units:
+        raise InputError("--sensor and --units go with --column; with --columns give "
+                         "COLUMN:SENSOR:UNITS or --gyro-units/--accel-units")
+    json_path = _out_path(args.json) if args.json else None
+    out = _out_dir(args.out)
+    refuse_overwrite({"--json": json_path}, {"the record": args.file})
+    units = {s: u for s, u in (("gyro", args.gyro_units), ("accel", args.accel_units)) if u}
+    axes = resolve_axes(args.columns, units)
+    rec = _load(args, columns=[a.column for a in axes])
+    rec.require_contiguous("the Allan deviation")
+    for axis in axes:
+        print(f"fosmodel: {axis.describe()}", file=sys.stderr)
+    noise = imu_noise({a.column: rec.column(a.column) for a in axes}, axes, rec.require_rate(),
+                      rec.source, min_tau=args.min_tau)
+    with report_directory(out, [args.file]) as tmp:
+        write_imu_noise(noise, tmp, args.title or Path(args.file).name)
+    print(noise.summary())
+    for a in noise.axes:
+        if a.fit.misses():
+            print(f"warning: {a.axis.column}: the IEEE Std 952 fit misses the measured Allan "
+                  "deviation beyond its 95 % interval; see its figure's lower panel",
+                  file=sys.stderr)
+    if json_path:
+        write_text(json_path, json.dumps(noise.to_dict(), indent=1) + "\n")
+    print(f"Allan noise report of {len(axes)} axes written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else ""))
+    return 0
+
+
+def synth(args: argparse.Namespace) -> int:
+    from data_synth.cli import run
+
+    return run(args)
+
+
+def demo(args: argparse.Namespace) -> int:
+    from ..demo import run_demo
+
+    run_demo(Path(args.out))
+    return 0

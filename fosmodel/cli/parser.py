@@ -1,0 +1,251 @@
+"""The command line's grammar: argument types, the loader options and the parser."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import NoReturn
+
+import numpy as np
+
+from .._version import __version__
+from ..core.fos import STOP_RULES
+from ..io.loader import OUTLIER_K, OUTLIER_MODES
+from . import commands
+
+
+def _exog_arg(text: str) -> tuple[str, int]:
+    name, sep, lag = text.partition(":")
+    if not sep or not name or not lag.isdigit():
+        raise argparse.ArgumentTypeError(f"expected NAME:K (e.g. temp:5), got {text!r}")
+    return name, int(lag)
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not np.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def _levels_arg(text: str) -> list[float] | str:
+    """``auto`` or comma-separated positive time constants in seconds."""
+    if text == "auto":
+        return text
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(np.isfinite(v) and v > 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected 'auto' or time constants in seconds like "
+                                         f"5,20, got {text!r}")
+    return values
+
+
+def _int_list(text: str) -> list[int]:
+    """``1-10`` or ``1,2,5`` or ``1-3,8`` -> a list of integers."""
+    out = []
+    for part in text.split(","):
+        lo, sep, hi = part.strip().partition("-")
+        try:
+            out.extend(range(int(lo), int(hi) + 1) if sep else [int(lo)])
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected integers like 1-10 or 1,2,5, got {text!r}"
+                                             ) from None
+    return out
+
+
+def _name_list(text: str) -> list[str]:
+    return [p.strip() for p in text.split(",") if p.strip()]
+
+
+def _split_arg(text: str) -> tuple[float, float]:
+    try:
+        train, evaluate = (float(p) for p in text.split(","))
+    except ValueError:
+        train = evaluate = math.nan
+    if not (math.isfinite(train) and math.isfinite(evaluate)):
+        raise argparse.ArgumentTypeError(f"expected TRAIN_S,EVALUATE_S, two finite seconds (e.g. "
+                                         f"180,180), got {text!r}")
+    return train, evaluate
+
+
+def _fractions(text: str) -> tuple[float, float]:
+    try:
+        train, evaluate = (float(p) for p in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected TRAIN,EVALUATE fractions (e.g. 0.5,0.2), "
+                                         f"got {text!r}") from None
+    return train, evaluate
+
+
+def _add_loader_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--rate", type=_positive_float,
+                        help="sample rate in Hz (if no time column)")
+    parser.add_argument("--scale", action="append", metavar="NAME=FACTOR",
+                        help="multiply column NAME by FACTOR, e.g. gx=1/131 for raw counts "
+                             "(repeatable)")
+    parser.add_argument("--uniform", action="store_true",
+                        help="take the samples as uniformly spaced at the time column's "
+                             "effective rate (a host's bursty receive time)")
+    parser.add_argument("--outliers", choices=OUTLIER_MODES, default="keep",
+                        help=f"outliers (|x - median| > {OUTLIER_K:g} x 1.4826 MAD): keep (report, "
+                             "default), clip or drop")
+    gaps = parser.add_mutually_exclusive_group()
+    gaps.add_argument("--fill", dest="gaps", action="store_const", const="fill",
+                      help="fill gaps of the time column by linear interpolation")
+    gaps.add_argument("--segments", dest="gaps", action="store_const", const="segments",
+                      help="keep gaps and use the contiguous segments (fit and predict)")
+    parser.set_defaults(gaps="refuse")
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors take one line, like every other error."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"fosmodel: error: {message} ({self.prog} --help shows the usage)\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="fosmodel",
+        description="Fast Orthogonal Search error models for MEMS inertial sensors.",
+    )
+    parser.add_argument("--version", action="version", version=f"fosmodel {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log details and tracebacks")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    fit = sub.add_parser("fit", help="fit a FOS model to one column of a record")
+    fit.add_argument("file", help="CSV, .npy or .parquet record")
+    fit.add_argument("--column", required=True, help="column to model")
+    _add_loader_options(fit)
+    fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L (default 10)")
+    fit.add_argument("--degree", type=int, default=1, help="CP, cross-product degree (default 1)")
+    fit.add_argument("--exog", type=_exog_arg, action="append", metavar="NAME:K",
+                     help="exogenous column NAME with lags 0..K (repeatable)")
+    fit.add_argument("--max-terms", type=int, help="most terms besides the constant")
+    fit.add_argument("--stop", choices=STOP_RULES, default="korenberg", help="stopping rule")
+    fit.add_argument("--tol", type=float, help="fraction for --stop variance / mean_square")
+    fit.add_argument("--levels", type=_levels_arg, metavar="auto|T1,T2,...",
+                     help="local levels of the output to offer: their time constants in "
+                          "seconds, or 'auto' for a grid below the record's Allan floor")
+    fit.add_argument("--max-candidates", type=_positive_int, default=100_000,
+                     help="refuse a candidate set larger than this (default 100000)")
+    fit.add_argument("--out", required=True, help="model file to write (JSON)")
+    fit.set_defaults(func=commands.fit)
+
+    pred = sub.add_parser("predict", help="one-step-ahead prediction with a saved model")
+    pred.add_argument("file", help="CSV, .npy or .parquet record")
+    pred.add_argument("--model", required=True, help="model file written by 'fosmodel fit'")
+    pred.add_argument("--column", help="column to predict (default: the one the model was fit on)")
+    _add_loader_options(pred)
+    pred.add_argument("--out", required=True, help="CSV to write")
+    pred.set_defaults(func=commands.predict)
+
+    study = sub.add_parser("study", help="model-order study: every method, order and degree")
+    study.add_argument("files", nargs="+", metavar="FILE",
+                       help="CSV, .npy or .parquet records; with several files or columns, "
+                            "a report directory per file and column")
+    study.add_argument("--columns", "--column", dest="columns", type=_name_list, required=True,
+                       metavar="COL[,COL...]", help="columns to model, in every file")
+    _add_loader_options(study)
+    study.add_argument("--sensor", required=True, choices=("accel", "gyro"))
+    study.add_argument("--units", required=True,
+                       help="units of the column: m/s^2, g, mg (accel); rad/s, deg/s, deg/h (gyro)")
+    study.add_argument("--orders", type=_int_list, default=list(range(1, 11)),
+                       help="model orders, e.g. 1-10 (default) or 1,2,5")
+    study.add_argument("--degrees", type=_int_list, default=[1, 2],
+                       help="FOS cross-product degrees (default 1,2)")
+    study.add_argument("--methods", type=_name_list, default=["fos", "yw", "cov", "burg", "gm"],
+                       help="comma-separated among fos,yw,cov,burg,gm (default all)")
+    study.add_argument("--protocol", choices=("paper", "fair", "both"), default="both")
+    study.add_argument("--no-levels", action="store_true",
+                       help="leave out the methods about the local level (fair protocol)")
+    study.add_argument("--split", type=_split_arg, default=(180.0, 180.0),
+                       help="training and evaluation seconds (default 180,180)")
+    study.add_argument("--horizon", type=_positive_float, default=30.0,
+                       help="outage horizon in seconds (default 30)")
+    study.add_argument("--starts", type=int, default=20, help="outage starts (default 20)")
+    study.add_argument("--denoise", choices=("wavelet", "kaiser"), default="wavelet",
+                       help="denoiser of the baselines under the paper protocol")
+    study.add_argument("--stop", choices=STOP_RULES, default="korenberg", help="FOS stopping rule")
+    study.add_argument("--title", help="title of the report")
+    study.add_argument("--out", required=True, help="output directory (created)")
+    study.add_argument("--json", help="also write every row and the best rows as JSON")
+    dask = study.add_mutually_exclusive_group()
+    dask.add_argument("--scheduler", metavar="ADDRESS",
+                      help="run the fits on the Dask cluster of this scheduler "
+                           "(e.g. tcp://10.0.0.5:8786)")
+    dask.add_argument("--workers", type=_positive_int, metavar="N",
+                      help="run the fits on a local Dask cluster of N single-threaded processes")
+    study.add_argument("--connect-timeout", type=_positive_float, default=10.0, metavar="S",
+                       help="seconds to wait for --scheduler (default 10)")
+    study.set_defaults(func=commands.study)
+
+    loop = sub.add_parser("close-loop", help="find what the model lacks in its residual, "
+                          "add it, report the error before and after")
+    loop.add_argument("file", help="CSV, .npy or .parquet record")
+    loop.add_argument("--column", required=True, help="column to model")
+    _add_loader_options(loop)
+    loop.add_argument("--aux", nargs="+", metavar="COL",
+                      help="columns that may explain the residual (default: every other column)")
+    loop.add_argument("--sensor", choices=("accel", "gyro"), help="for position errors")
+    loop.add_argument("--units", help="units of the column (with --sensor)")
+    loop.add_argument("--max-lag", type=int, default=10, help="L of the starting model")
+    loop.add_argument("--split", type=_fractions, default=(0.5, 0.2),
+                      help="fractions for fitting and evaluation (default 0.5,0.2)")
+    loop.add_argument("--title", help="title of the report")
+    loop.add_argument("--out", required=True, help="output directory (created)")
+    loop.add_argument("--json", help="also write the before/after metrics and effects as JSON")
+    loop.add_argument("--model", help="also write the final model as JSON (as 'fosmodel fit' "
+                                      "does), for 'fosmodel predict' and a filter")
+    loop.set_defaults(func=commands.close_loop)
+
+    allan = sub.add_parser("allan", help="Allan deviation with confidence intervals and the "
+                           "IEEE Std 952 noise coefficients")
+    allan.add_argument("file", help="CSV, .npy or .parquet record")
+    which = allan.add_mutually_exclusive_group(required=True)
+    which.add_argument("--column", help="column to analyse (a rate signal)")
+    which.add_argument("--columns", type=_name_list, metavar="COL[:SENSOR:UNITS],...",
+                       help="several axes in one run, e.g. gx,gy,gz,ax,ay,az: one table, one "
+                            "figure per sensor, Kalibr/MATLAB/JSON exports; the sensor and "
+                            "units come from the names (gx_dps, acc_y_mps2) where not given")
+    _add_loader_options(allan)
+    allan.add_argument("--sensor", choices=("accel", "gyro"),
+                       help="sensor of --column, for navigation units")
+    allan.add_argument("--units", help="units of --column (with --sensor)")
+    allan.add_argument("--gyro-units", metavar="UNITS",
+                       help="units of the gyro columns of --columns (rad/s, deg/s, deg/h)")
+    allan.add_argument("--accel-units", metavar="UNITS",
+                       help="units of the accelerometer columns of --columns (m/s^2, g, mg)")
+    allan.add_argument("--min-tau", type=_positive_float,
+                       help="shortest averaging time fitted, in s (default: found from the "
+                            "curve, leaving out taus bent by the sensor's own filtering)")
+    allan.add_argument("--title", help="title of the figure")
+    allan.add_argument("--out", required=True, help="output directory (created)")
+    allan.add_argument("--json", help="also write the Allan deviation and coefficients as JSON")
+    allan.set_defaults(func=commands.allan)
+
+    from data_synth.cli import configure_parser
+
+    synth = sub.add_parser("synth", help="write a synthetic record with its ground truth")
+    configure_parser(synth).set_defaults(func=commands.synth)
+
+    demo = sub.add_parser("demo", help="the main job on embedded synthetic data")
+    demo.add_argument("--out", default="fosmodel-out",
+                      help="output directory (default ./fosmodel-out)")
+    demo.set_defaults(func=commands.demo)
+    return parser
