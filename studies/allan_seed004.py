@@ -4,7 +4,7 @@ Twelve hours of gyro 1 of the ``gyro_array_8`` scenario at 102.4 Hz with seed 00
 values (eq. 5.4: ARW 0.068 deg/sqrt(s), RRW 0.00029 deg/sqrt(s^3)); the overlapping Allan
 deviation with its 68 % intervals and the five-term weighted least-squares fit (quantization,
 ARW, bias instability, RRW, rate ramp), set against the truth.  Writes the deviation, the
-fit and the figure to ``studies/results/allan_seed004/`` and rewrites the README section
+fit and the figure to ``studies/results/allan_seed004/`` and rewrites the documentation's section
 ``allan-seed004`` from this run.
 
 Run: ``python studies/allan_seed004.py`` (about a minute).
@@ -15,7 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pandas as pd
-from readme_section import README, replace_section
+from readme_section import page_path, replace_section
 
 from data_synth import make_scenario
 from fosmodel.models.summary import markdown_table
@@ -43,16 +43,15 @@ def main() -> None:
                      "Upper limit": fit.limits.get(term, float("nan"))})
     table = pd.DataFrame(rows)
     table.to_csv(OUT / "truth.csv", index=False)
-    rel = OUT.relative_to(README.parent)
     replace_section("allan-seed004", "\n".join([
         f"`python studies/allan_seed004.py`: {HOURS:g} h of gyro 1 of `gyro_array_8` at "
         f"{rec.rate:g} Hz with seed 004's ARW {truth['N']} deg/sqrt(s) and RRW {truth['K']} "
         f"deg/sqrt(s^3), {len(result.taus)} averaging times from {result.taus[0]:.3g} to "
         f"{result.taus[-1]:.4g} s:", "",
         markdown_table(table, digits=4), "",
-        f"![Allan deviation with the fitted lines]({rel}/allan.png)"]))
+        f"![Allan deviation with the fitted lines]({page_path(OUT)}/allan.png)"]))
     print(fit.summary())
-    print(f"results in {OUT}; README section allan-seed004 rewritten")
+    print(f"results in {OUT}; section allan-seed004 of docs/pages/allan.md rewritten")
 
 
 if __name__ == "__main__":

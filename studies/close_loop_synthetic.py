@@ -1,4 +1,5 @@
-"""The residual loop on synthetic records with undeclared effects: the tables of the README.
+"""The residual loop on synthetic records with undeclared effects: the tables of the documentation
+(docs/pages/loop.md).
 
 For every loop scenario of data_synth the loop runs on seeds 0-9 (controls:
 0-19): the 5-minute records with one undeclared effect each (two at once in
@@ -15,7 +16,7 @@ step), how often a slow one was at least *followed* (named, or taken as the
 local level, the stochastic form of a wandering bias), what else was kept,
 and in how many seeds the prediction segment's 30 s bias RMS ended lower.
 Full reports for seed 0 go to ``studies/results/close_loop/<record>/``; the
-README section ``close-loop-synthetic`` is rewritten from this run.
+Section ``close-loop-synthetic`` of docs/pages/loop.md is rewritten from this run.
 
 Run: ``python studies/close_loop_synthetic.py`` (about ten minutes).
 """
@@ -25,7 +26,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pandas as pd
-from readme_section import README, replace_section
+from readme_section import README, page_path, replace_section
 
 from data_synth import make_scenario
 from data_synth.true_effects import true_effects
@@ -148,7 +149,7 @@ def main() -> None:
         markdown_table(effects, digits=4), "", markdown_table(controls), "",
         f"Reports for seed 0, with their residual figures: `{rel}/<record>/report.md`.", "",
         f"![a bias random walk with a temperature effect, seed 0]"
-        f"({rel}/slow_random_walk_temperature/residual.png)"]))
+        f"({page_path(OUT)}/slow_random_walk_temperature/residual.png)"]))
     print(effects.to_string(index=False))
     print(controls.to_string(index=False))
 

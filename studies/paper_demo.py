@@ -1,7 +1,7 @@
 """The demo study from scratch: FOS paper Tables 1-2 and Figures 6-7 on paper-like records.
 
 Runs ``fosmodel demo`` into ``studies/results/paper_demo/`` and rewrites the
-README section ``paper-demo`` with the two comparison tables, one figure and
+section ``paper-demo`` of docs/pages/studies.md, with the two comparison tables, one figure and
 the comparisons below them, all taken from this run.
 
 Run: ``python studies/paper_demo.py``
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from readme_section import README, replace_section
+from readme_section import README, page_path, replace_section
 
 from fosmodel.demo import run_demo
 from fosmodel.models.summary import markdown_table
@@ -51,9 +51,9 @@ def main() -> None:
         parts += [f"**Table {number}: {name}** (orders 1 and 10; all rows in "
                   f"`{rel}/{name}/study.csv`)", "", markdown_table(paper_table(result), digits=3),
                   "", comparison(name, result), ""]
-    parts += [f"![accelerometer, fair protocol]({rel}/accelerometer/order_fair.png)", ""]
+    parts += [f"![accelerometer, fair protocol]({page_path(OUT)}/accelerometer/order_fair.png)", ""]
     replace_section("paper-demo", "\n".join(parts))
-    print(f"README section paper-demo rewritten from {OUT}")
+    print(f"section paper-demo of docs/pages/studies.md rewritten from {OUT}")
 
 
 if __name__ == "__main__":

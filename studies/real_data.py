@@ -2,7 +2,7 @@
 
 Reads ``../shared/data`` (sources and licences in its README) and skips with a
 clear message where it is absent.  Writes every report, table and figure under
-``studies/results/real/`` and rewrites the README sections ``real-allan`` and
+``studies/results/real/`` and rewrites the documentation's sections ``real-allan`` and
 ``real-data`` from this run, so every number there comes from it.
 
 * Model-order study (orders 1-10, FOS CP 1 and 2, every method, both
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from readme_section import README, replace_section
+from readme_section import README, page_path, replace_section
 
 from fosmodel.io.loader import Record, load_record
 from fosmodel.io.samples import load_mpu6050_static
@@ -390,7 +390,7 @@ def main() -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     write_allan_section(run_allan(recs, mtig_keep))
     if "--allan" in sys.argv[1:]:
-        print(f"README section real-allan rewritten; results in {OUT}")
+        print(f"section real-allan of docs/pages/real-data.md rewritten; results in {OUT}")
         return
     mtig_clip = load_record(DATA / "mtig_contaminated" / "gyro_x.csv.gz", rate=100,
                             outliers="clip")
@@ -408,7 +408,8 @@ def main() -> None:
         markdown_table(studies, digits=4), "",
         "ADIS16405 imu1 ay_g in the layout of the paper's Table 1 (units g):", "",
         markdown_table(example, digits=3), "",
-        f"![ADIS16405 imu1 ay_g, fair protocol]({rel}/study/adis16405_imu1/ay_g/order_fair.png)",
+        f"![ADIS16405 imu1 ay_g, fair protocol]({page_path(OUT)}/study/adis16405_imu1/ay_g/"
+        "order_fair.png)",
         "", f"**Residual loop** (every axis; reports in `{rel}/loop/`), prediction segment:", "",
         *loop_lines(loops), "",
         markdown_table(loops, digits=3), "",
@@ -416,7 +417,7 @@ def main() -> None:
         *named_effects(loop_results, recs, mtig_keep, temp), "",
         "MPU-6050 (sunsided) with its die temperature added, prediction segment:", "",
         markdown_table(temp, digits=3)]))
-    print(f"README section real-data rewritten; results in {OUT}")
+    print(f"section real-data of docs/pages/real-data.md rewritten; results in {OUT}")
 
 
 if __name__ == "__main__":

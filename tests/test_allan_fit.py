@@ -130,7 +130,7 @@ def test_a_bounded_bias_that_the_terms_cannot_follow_is_reported(tmp_path, capsy
 def test_the_fit_follows_the_adis16405_sessions():
     """All six axes of the six sessions: the fitted curve within 0.7-1.4x of the measured
     deviation over 0.1-1000 s, and B within 1.5x of min(ADEV)/0.664, on all but the four
-    axes named in the README (a bounded bias's bump at the long end on three accelerometers;
+    axes named in the documentation (a bounded bias's bump at the long end on three accelerometers;
     imu1 gz, whose rise from 70 s the rate random walk takes from B)."""
     outside, b_off = [], []
     for session in range(1, 7):

@@ -1,6 +1,6 @@
-"""The README's table of errors, row by row: each problem, built here, gives what the row shows.
+"""The documentation's table of errors, row by row: each problem, built here, gives its row.
 
-The table (README, "Command line", ``### Errors``) has one row per input problem: the problem,
+The table (docs/pages/cli.md, ``## Errors``) has one row per input problem: the problem,
 the message after ``fosmodel: error: `` (``...`` where it names a file or goes on), and the
 exit code.  ``BUILDERS`` maps each problem, spelt as in the table, to a function that writes
 the input and returns the command line; a row without a builder, or a builder without a row,
@@ -18,15 +18,13 @@ from records import bursty_csv, spiky_csv
 
 from fosmodel import cli
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+PAGE = Path(__file__).resolve().parents[1] / "docs" / "pages" / "cli.md"
 
 
 def _table():
-    """(problem, message, exit code) of each row of the README's ``### Errors`` table."""
-    text = README.read_text(encoding="utf-8")
-    if "\n### Errors\n" not in text:
-        return []
-    lines = text.split("\n### Errors\n", 1)[1].split("\n## ", 1)[0].splitlines()
+    """(problem, message, exit code) of each row of the page's ``## Errors`` table."""
+    text = PAGE.read_text(encoding="utf-8")
+    lines = text.split("\n## Errors\n", 1)[1].split("\n## ", 1)[0].splitlines()
     table = itertools.dropwhile(lambda line: not line.startswith("|"), lines)
     rows = list(itertools.takewhile(lambda line: line.startswith("|"), table))[2:]
     return [tuple(cell.strip() for cell in row.strip("|").split("|")) for row in rows]
@@ -205,7 +203,7 @@ def test_every_builder_has_a_row():
 
 @pytest.mark.parametrize("problem, shown, code", ROWS, ids=[row[0] for row in ROWS])
 def test_each_row_of_the_errors_table(problem, shown, code, tmp_path, capsys):
-    assert problem in BUILDERS, f"no test builds the README's error row {problem!r}"
+    assert problem in BUILDERS, f"no test builds the documentation's error row {problem!r}"
     argv = BUILDERS[problem](tmp_path)
     capsys.readouterr()  # what building printed
     before = _snapshot(tmp_path)

@@ -335,7 +335,7 @@ def test_no_warnings_on_clean_fit():
 
 
 def test_greedy_search_limit_on_coherent_sparse_ar():
-    """A known limit of forward selection, kept visible (README, "Limits").
+    """A known limit of forward selection, kept visible (docs/pages/limits.md).
 
     A sparse seasonal AR, (1 - 1.8641 z^-1 + 0.9604 z^-2)(1 - 0.85 z^-7), has true lags
     1, 2, 7, 8, 9 whose correlations overlap strongly.  Asked for 5 terms, FOS (like

@@ -1,4 +1,5 @@
-"""The README's examples run: its Python blocks, and its command-line block through the CLI."""
+"""The documentation's examples run: the Python and command-line blocks of the README and of
+every page in docs/pages."""
 
 import re
 import shlex
@@ -8,30 +9,44 @@ import pytest
 
 from fosmodel.cli import main
 
-README = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs" / "pages").glob("*.md"))]
 
 
-def _blocks(language):
-    return re.findall(rf"```{language}\n(.*?)```", README, flags=re.S)
+def _blocks(language, pages=PAGES):
+    return [(page.relative_to(ROOT).as_posix(), block) for page in pages for block in
+            re.findall(rf"```{language}\n(.*?)```", page.read_text(), flags=re.S)]
 
 
-@pytest.mark.parametrize("code", _blocks("python"))
-def test_python_blocks_run(code, tmp_path, monkeypatch):
+def _commands():
+    """Every command-line block but the install commands (README and the docs' home)."""
+    return [(page, block) for page, block in _blocks("bash")
+            if not block.lstrip().startswith("pip install")]
+
+
+@pytest.mark.parametrize(("page", "code"), _blocks("python"))
+def test_python_blocks_run(page, code, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    exec(compile(code, "README.md", "exec"), {})
+    exec(compile(code, page, "exec"), {})
 
 
 def test_first_two_commands_install_demo_and_test():
-    first, second = _blocks("bash")[0].strip().splitlines()[:2]
+    first, second = _blocks("bash", PAGES[:1])[0][1].strip().splitlines()[:2]
     assert first.startswith("pip install") and first.endswith("fosmodel demo")
     assert second.startswith("pip install") and "pytest" in second
 
 
-def test_command_line_block_runs(tmp_path, monkeypatch):
+def test_the_readme_is_short_and_its_links_resolve():
+    text = PAGES[0].read_text()
+    assert len(text.splitlines()) <= 200
+    for link in re.findall(r"\]\(([^)#]+)\)", text):
+        assert (ROOT / link).is_file(), link
+
+
+@pytest.mark.parametrize(("page", "block"), _commands())
+def test_command_line_blocks_run(page, block, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    block = next(b for b in _blocks("bash") if "fosmodel fit" in b)
     for line in block.strip().splitlines():
         args = shlex.split(line, comments=True)
-        assert args[0] == "fosmodel"
-        assert main(args[1:]) == 0, line
-    assert (tmp_path / "pred.csv").exists() and (tmp_path / "rec.truth.json").exists()
+        assert args[0] == "fosmodel", f"{page}: {line}"
+        assert main(args[1:]) == 0, f"{page}: {line}"
