@@ -15,7 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pandas as pd
-from readme_section import page_path, replace_section
+from doc_pages import replace_section, show_figure
 
 from data_synth import make_scenario
 from fosmodel.models.summary import markdown_table
@@ -49,7 +49,8 @@ def main() -> None:
         f"deg/sqrt(s^3), {len(result.taus)} averaging times from {result.taus[0]:.3g} to "
         f"{result.taus[-1]:.4g} s:", "",
         markdown_table(table, digits=4), "",
-        f"![Allan deviation with the fitted lines]({page_path(OUT)}/allan.png)"]))
+        f"![Allan deviation with the fitted lines]"
+        f"({show_figure(OUT / 'allan.png', 'allan_seed004.png')})"]))
     print(fit.summary())
     print(f"results in {OUT}; section allan-seed004 of docs/pages/allan.md rewritten")
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pandas as pd
-from readme_section import README, page_path, replace_section
+from doc_pages import README, replace_section, show_figure
 
 from data_synth import make_scenario
 from data_synth.true_effects import true_effects
@@ -145,11 +145,13 @@ def main() -> None:
     effects.to_csv(OUT / "effects_found.csv", index=False)
     controls.to_csv(OUT / "controls.csv", index=False)
     rel = OUT.relative_to(README.parent)
+    figure = show_figure(OUT / "slow_random_walk_temperature" / "residual.png",
+                         "loop_residual.png")
     replace_section("close-loop-synthetic", "\n".join([
         markdown_table(effects, digits=4), "", markdown_table(controls), "",
         f"Reports for seed 0, with their residual figures: `{rel}/<record>/report.md`.", "",
         f"![a bias random walk with a temperature effect, seed 0]"
-        f"({page_path(OUT)}/slow_random_walk_temperature/residual.png)"]))
+        f"({figure})"]))
     print(effects.to_string(index=False))
     print(controls.to_string(index=False))
 

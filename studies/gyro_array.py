@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from doc_pages import show_figure
 from matplotlib.figure import Figure
 
 from data_synth import CorrelatedRandomWalk, CorrelatedWhiteNoise, compose, make_scenario
@@ -207,6 +208,7 @@ def main() -> None:
         report += [f"## {stem}", "", markdown_table(frame, digits=4), ""]
         print(f"\n{stem}\n{frame.to_string(index=False)}")
     save_figure(fig, OUT, "drift")
+    show_figure(OUT / "drift.png", "gyro_array_drift.png")
     write_text(OUT / "report.md", "\n".join([*report, "![drift](drift.png)", ""]))
 
 

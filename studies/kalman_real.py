@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from doc_pages import show_figure
 from kalman_static import GM, RATE, choose_fos_lag, filter_position_error, fit_models, statistics
 from matplotlib.figure import Figure
 
@@ -230,6 +231,7 @@ def main() -> None:
         write_tables(table, OUT, stem)
         print(f"\n## {stem}\n\n{markdown_table(table, digits=4)}")
     save_figure(figure(frame, fits[FIGURE_AXIS]), OUT, "consistency")
+    show_figure(OUT / "consistency.png", "kalman_real_consistency.png")
     print(f"\n{time.perf_counter() - start:.0f} s; results in {OUT}")
 
 

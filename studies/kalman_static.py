@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from doc_pages import show_figure
 from matplotlib.figure import Figure
 from scipy.linalg import block_diag
 
@@ -225,6 +226,7 @@ def main() -> None:
         write_tables(table, OUT, stem)
         print(f"\n## {stem}\n\n{markdown_table(table, digits=4)}")
     save_figure(figure(traces), OUT, "position_error_30s")
+    show_figure(OUT / "position_error_30s.png", "kalman_static_position_error_30s.png")
     print(f"\nFOS lag chosen: L={best}; results in {OUT}")
 
 

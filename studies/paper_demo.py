@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from readme_section import README, page_path, replace_section
+from doc_pages import README, replace_section, show_figure
 
 from fosmodel.demo import run_demo
 from fosmodel.models.summary import markdown_table
@@ -51,7 +51,8 @@ def main() -> None:
         parts += [f"**Table {number}: {name}** (orders 1 and 10; all rows in "
                   f"`{rel}/{name}/study.csv`)", "", markdown_table(paper_table(result), digits=3),
                   "", comparison(name, result), ""]
-    parts += [f"![accelerometer, fair protocol]({page_path(OUT)}/accelerometer/order_fair.png)", ""]
+    figure = show_figure(OUT / "accelerometer" / "order_fair.png", "paper_demo_order_fair.png")
+    parts += [f"![accelerometer, fair protocol]({figure})", ""]
     replace_section("paper-demo", "\n".join(parts))
     print(f"section paper-demo of docs/pages/studies.md rewritten from {OUT}")
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from readme_section import README, page_path, replace_section
+from doc_pages import README, replace_section, show_figure
 
 from fosmodel.io.loader import Record, load_record
 from fosmodel.io.samples import load_mpu6050_static
@@ -401,6 +401,8 @@ def main() -> None:
         frame.to_csv(OUT / f"{stem}.csv", index=False)
     example = paper_table(results[("ADIS16405 imu1", "ay_g")])
     rel = OUT.relative_to(README.parent)
+    figure = show_figure(OUT / "study" / "adis16405_imu1" / "ay_g" / "order_fair.png",
+                         "real_order_fair.png")
     replace_section("real-data", "\n".join([
         "**Model-order study** (every axis; per axis reports, tables and figures in "
         f"`{rel}/study/`; all ratios in `{rel}/studies.csv`):", "",
@@ -408,8 +410,7 @@ def main() -> None:
         markdown_table(studies, digits=4), "",
         "ADIS16405 imu1 ay_g in the layout of the paper's Table 1 (units g):", "",
         markdown_table(example, digits=3), "",
-        f"![ADIS16405 imu1 ay_g, fair protocol]({page_path(OUT)}/study/adis16405_imu1/ay_g/"
-        "order_fair.png)",
+        f"![ADIS16405 imu1 ay_g, fair protocol]({figure})",
         "", f"**Residual loop** (every axis; reports in `{rel}/loop/`), prediction segment:", "",
         *loop_lines(loops), "",
         markdown_table(loops, digits=3), "",

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from doc_pages import show_figure
 from matplotlib.figure import Figure
 from numpy.polynomial import Polynomial
 
@@ -143,6 +144,7 @@ def main() -> None:
                    "", "Leave one plateau out (means over the held-out plateaus):", "",
                    markdown_table(mean, digits=4), "", lines[-1], ""]
     save_figure(figure(tables), OUT, "coefficients")
+    show_figure(OUT / "coefficients.png", "temperature_coefficients.png")
     report += ["![per-plateau coefficients](coefficients.png)", ""]
     write_text(OUT / "report.md", "\n".join(report))
     for table in tables.values():
