@@ -56,7 +56,7 @@ def test_kaiser_record_shorter_than_the_filter():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(rate=0.0), "rate must be a positive number"),
+    (dict(rate=0.0), "rate must be a finite number > 0"),
     (dict(rate=RATE, cutoff_hz=99.5), "must lie inside 0-100 Hz"),
     (dict(rate=RATE, transition_hz=0.0), "positive width"),
     (dict(rate=RATE, attenuation_db=10.0), "attenuation_db must be >= 21"),

@@ -28,6 +28,7 @@ import numpy as np
 
 from .exceptions import InputError
 from .levels import is_level, level_name, level_tau
+from .validation import check_int
 
 OUTPUT = "y"
 _CHANNEL_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -164,16 +165,16 @@ class CandidateSpec:
         object.__setattr__(self, "exog_lags", dict(self.exog_lags or {}))
         object.__setattr__(self, "columns", tuple(self.columns or ()))
         object.__setattr__(self, "levels", _level_taus(self.levels))
-        _check_int("max_lag", self.max_lag, 0)
-        _check_int("degree", self.degree, 1)
+        check_int(self.max_lag, "max_lag", 0)
+        check_int(self.degree, "degree", 1)
         if self.product_lags is not None:
-            _check_int("product_lags", self.product_lags, 1)
+            check_int(self.product_lags, "product_lags", 1)
         for ch, k in self.exog_lags.items():
             if not isinstance(ch, str) or not _CHANNEL_RE.match(ch) or ch == OUTPUT:
                 raise InputError(
                     f"exogenous channel name {ch!r} must be an identifier other than {OUTPUT!r}"
                 )
-            _check_int(f"lag of exogenous channel {ch!r}", k, 0)
+            check_int(k, f"lag of exogenous channel {ch!r}", 0)
         for name in self.columns:
             if not isinstance(name, str) or not _COLUMN_RE.match(name) or "[" in name:
                 raise InputError(
@@ -230,11 +231,6 @@ def _level_taus(taus: object) -> tuple[float, ...]:
     if len(set(out)) != len(out):
         raise InputError(f"level time constants repeat: {', '.join(map(level_name, out))}")
     return tuple(sorted(out))
-
-
-def _check_int(what: str, value: object, lowest: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lowest:
-        raise InputError(f"{what} must be an integer >= {lowest}, got {value!r}")
 
 
 def count_candidates(spec: CandidateSpec) -> int:

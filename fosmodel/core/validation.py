@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import difflib
+import math
 from collections.abc import Iterable, Mapping
 
 import numpy as np
@@ -14,6 +15,21 @@ def did_you_mean(name: str, options: Iterable[str]) -> str:
     """``" (did you mean 'x'?)"`` for the closest option, or an empty string."""
     close = difflib.get_close_matches(name, list(options), n=1, cutoff=0.6)
     return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def check_int(value: object, name: str, minimum: int) -> int:
+    """``value`` as an int, refusing a bool, a non-integer or one below ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def check_positive(value: object, name: str) -> float:
+    """``value`` as a float, refusing a bool, a non-number, NaN, infinity and anything <= 0."""
+    if (isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating))
+            or not math.isfinite(value) or value <= 0):
+        raise InputError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
 
 
 def as_signal(values: object, name: str, last: int | None = None) -> np.ndarray:

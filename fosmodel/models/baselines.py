@@ -27,7 +27,7 @@ from statsmodels.tsa.ar_model import AutoReg
 
 from .._version import __version__
 from ..core.exceptions import InputError
-from ..core.validation import as_signal, did_you_mean
+from ..core.validation import as_signal, check_int, did_you_mean
 from .dynamics import (
     ar_free_run,
     ar_one_step,
@@ -112,12 +112,6 @@ def _estimate(method: str, x: np.ndarray, order: int) -> tuple[np.ndarray, float
 
 
 # -- shared behaviour --------------------------------------------------------------------
-
-
-def _check_int(value: object, name: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
 
 
 def _check_record(y: object, order: int) -> np.ndarray:
@@ -342,7 +336,7 @@ class ARModel(_LinearAR):
         self.method = method
 
     def _order(self) -> int:
-        return _check_int(self.order, "order", 1)
+        return check_int(self.order, "order", 1)
 
     def _check_params(self) -> None:
         self._order()

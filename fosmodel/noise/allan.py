@@ -49,7 +49,7 @@ from scipy.signal import welch
 from scipy.special import digamma
 
 from ..core.exceptions import InputError
-from ..core.validation import as_signal, did_you_mean
+from ..core.validation import as_signal, check_positive, did_you_mean
 from ..io.output import save_figure, write_tables
 from ..models.summary import Summary
 from .metrics import STANDARD_GRAVITY, to_si_scale
@@ -207,7 +207,7 @@ def allan_deviation(
         unknown sensor/units.
     """
     y = as_signal(y, "signal")
-    rate = _check_rate(rate)
+    rate = check_positive(rate, "rate")
     _check_units(sensor, units)
     if len(y) < MIN_SAMPLES:
         raise InputError(f"record too short for an Allan variance: {len(y)} samples, need at "
@@ -248,16 +248,6 @@ def spectral_line(y: np.ndarray, rate: float, fmin_hz: float) -> float | None:
     prominence[(freq < fmin_hz) | (np.arange(len(freq)) < 3)] = 0.0
     best = int(np.argmax(prominence))
     return float(freq[best]) if prominence[best] >= LINE_PROMINENCE else None
-
-
-def _check_rate(rate: float) -> float:
-    try:
-        value = float(rate)
-    except (TypeError, ValueError):
-        raise InputError(f"rate must be a number in Hz, got {rate!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"rate must be a finite number > 0 Hz, got {rate!r}")
-    return value
 
 
 def _check_units(sensor: str | None, units: str | None) -> None:

@@ -8,32 +8,17 @@ choice.  :func:`denoise` selects one by name so each method can be run on its ow
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pywt
 from scipy.signal import filtfilt, firwin, kaiserord
 
 from ..core.exceptions import InputError
-from ..core.validation import as_signal, did_you_mean
+from ..core.validation import as_signal, check_int, check_positive, did_you_mean
 
 DENOISERS = ("none", "wavelet", "kaiser")
 
 _WAVELET_MODE = "symmetric"
 _MIN_KAISER_DB = 21.0
-
-
-def _check_levels(levels: object) -> int:
-    if isinstance(levels, bool) or not isinstance(levels, (int, np.integer)) or levels < 1:
-        raise InputError(f"levels must be an integer >= 1, got {levels!r}")
-    return int(levels)
-
-
-def _check_rate(rate: object) -> float:
-    if (isinstance(rate, bool) or not isinstance(rate, (int, float, np.integer, np.floating))
-            or not math.isfinite(rate) or rate <= 0):
-        raise InputError(f"rate must be a positive number of Hz, got {rate!r}")
-    return float(rate)
 
 
 def wavelet_band_hz(rate: float, levels: int) -> float:
@@ -43,7 +28,7 @@ def wavelet_band_hz(rate: float, levels: int) -> float:
     6.25 Hz for 4 levels at 200 Hz, where the FOS paper states 12.5 Hz (the approximation's
     *sampling* rate, or the band of 3 levels).
     """
-    return _check_rate(rate) / 2 ** (_check_levels(levels) + 1)
+    return check_positive(rate, "rate") / 2 ** (check_int(levels, "levels", 1) + 1)
 
 
 def wavelet_lowpass(y: object, levels: int = 4, wavelet: str = "db4") -> np.ndarray:
@@ -80,7 +65,7 @@ def wavelet_lowpass(y: object, levels: int = 4, wavelet: str = "db4") -> np.ndar
     """
     # PyWavelets' Cython kernels reject read-only buffers (e.g. views of a loaded DataFrame)
     arr = np.require(as_signal(y, "y"), requirements=["C", "W"])
-    levels = _check_levels(levels)
+    levels = check_int(levels, "levels", 1)
     try:
         wav = pywt.Wavelet(wavelet)
     except (ValueError, TypeError):
@@ -143,7 +128,7 @@ def kaiser_lowpass(
         not longer than the filter.
     """
     arr = as_signal(y, "y")
-    rate = _check_rate(rate)
+    rate = check_positive(rate, "rate")
     nyquist = rate / 2
     low, high = cutoff_hz - transition_hz / 2, cutoff_hz + transition_hz / 2
     if not (transition_hz > 0 and 0 < low and high < nyquist):

@@ -27,7 +27,7 @@ from typing import Protocol
 import numpy as np
 
 from ..core.exceptions import InputError, UnstableModelWarning
-from ..core.validation import as_signal, did_you_mean
+from ..core.validation import as_signal, check_positive, did_you_mean
 
 #: Standard gravity in m/s^2, used only to convert the units "g" and "mg".
 STANDARD_GRAVITY = 9.80665
@@ -80,14 +80,6 @@ def to_si_scale(sensor: str, units: str) -> float:
     return scales[units]
 
 
-def _positive(value: float, name: str) -> float:
-    """``value`` as a float, refusing anything not finite and > 0."""
-    if not (isinstance(value, (int, float, np.integer, np.floating)) and math.isfinite(value)
-            and value > 0):
-        raise InputError(f"{name} must be a finite number > 0, got {value!r}")
-    return float(value)
-
-
 def equivalent_position_error(
     mse: float, sensor: str, units: str, horizon_s: float = 3600.0, g: float = PAPER_GRAVITY
 ) -> float:
@@ -119,10 +111,10 @@ def equivalent_position_error(
             and mse >= 0):
         raise InputError(f"mse must be a finite number >= 0, got {mse!r}")
     rms = math.sqrt(mse) * to_si_scale(sensor, units)
-    t = _positive(horizon_s, "horizon_s")
+    t = check_positive(horizon_s, "horizon_s")
     if sensor == "accel":
         return 0.5 * rms * t**2
-    return _positive(g, "g") * rms * t**3 / 6.0
+    return check_positive(g, "g") * rms * t**3 / 6.0
 
 
 # -- outages ---------------------------------------------------------------------------
@@ -252,10 +244,10 @@ def integrated_position_error(
         raise InputError(f"errors must be 1-D or 2-D with at least one sample per row, "
                          f"got shape {e.shape}")
     scale = to_si_scale(sensor, units)
-    rate = _positive(rate, "rate")
+    rate = check_positive(rate, "rate")
     if sensor == "accel":
         return np.asarray(e @ _hold_weights(e.shape[-1], rate, 2) * scale)
-    return np.asarray(e @ _hold_weights(e.shape[-1], rate, 3) * (scale * _positive(g, "g")))
+    return np.asarray(e @ _hold_weights(e.shape[-1], rate, 3) * (scale * check_positive(g, "g")))
 
 
 def bias_rms(residual: object, rate: float, tau_s: float) -> float:
@@ -285,7 +277,7 @@ def bias_rms(residual: object, rate: float, tau_s: float) -> float:
     except InputError as exc:
         raise InputError(f"{exc}; bias_rms needs a finite residual "
                          "(slice off the model's lag window first)") from None
-    width = round(_positive(tau_s, "tau_s") * _positive(rate, "rate"))
+    width = round(check_positive(tau_s, "tau_s") * check_positive(rate, "rate"))
     if width < 1:
         raise InputError(f"tau_s={tau_s} s is shorter than one sample at {rate} Hz")
     n_windows = len(r) // width
@@ -362,7 +354,7 @@ def outage_metrics(
     """
     y = as_signal(y, "y")
     start, stop = _segment_bounds(segment, len(y))
-    n_steps = round(_positive(horizon_s, "horizon_s") * _positive(rate, "rate"))
+    n_steps = round(check_positive(horizon_s, "horizon_s") * check_positive(rate, "rate"))
     if n_steps < 1:
         raise InputError(f"horizon_s={horizon_s} s is shorter than one sample at {rate} Hz")
     errors = free_run_errors(model, y, outage_starts(start, stop, n_steps, n_starts), n_steps)
