@@ -2,13 +2,13 @@
 
 from ._version import __version__
 from .core.candidates import CandidateSpec, Term, count_candidates, generate_terms
-from .core.exceptions import FOSModelError, InputError, UnstableModelWarning
+from .core.exceptions import FOSModelError, InputError, NotFittedError, UnstableModelWarning
 from .core.fos import FOSResult, StopRule, fos
 from .models.model import FOSModel
 from .models.regressor import FOSRegressor
 
 __all__ = [
     "CandidateSpec", "FOSModel", "FOSModelError", "FOSRegressor", "FOSResult", "InputError",
-    "StopRule", "Term", "UnstableModelWarning", "count_candidates", "fos", "generate_terms",
-    "__version__",
+    "NotFittedError", "StopRule", "Term", "UnstableModelWarning", "count_candidates", "fos",
+    "generate_terms", "__version__",
 ]

@@ -323,9 +323,36 @@ def test_tiny_scale_signal_gives_the_same_model():
     np.testing.assert_allclose(a.coef_, b.coef_, rtol=1e-9)
 
 
-def test_unfitted_model_says_so():
-    with pytest.raises(InputError, match="not fitted"):
-        FOSModel().predict(np.ones(20))
+def test_every_unfitted_model_raises_one_not_fitted_error():
+    """scikit-learn's NotFittedError and an InputError, from FOSModel, the baselines and the
+    regressor alike."""
+    from sklearn.exceptions import NotFittedError as SklearnNotFitted
+
+    from fosmodel import FOSRegressor, NotFittedError
+    from fosmodel.models.baselines import ARModel, GaussMarkovModel
+
+    calls = [lambda: FOSModel().predict(np.ones(20)), lambda: FOSModel().to_dict(),
+             lambda: ARModel(2).predict(np.ones(20)), lambda: GaussMarkovModel().summary(),
+             lambda: FOSRegressor().predict(np.ones((20, 2)))]
+    for call in calls:
+        with pytest.raises(SklearnNotFitted) as err:
+            call()
+        if not isinstance(err.value, NotFittedError):  # the regressor: scikit-learn's own check
+            continue
+        assert isinstance(err.value, InputError) and "is not fitted yet" in str(err.value)
+
+
+def test_the_fitted_state_round_trips_whole():
+    """fit, to_dict and from_dict read one list of the fitted state: every entry survives."""
+    from fosmodel.models.model import _FITTED_STATE
+
+    model = FOSModel(max_lag=4).fit(np.random.default_rng(3).standard_normal(2000))
+    saved = model.to_dict()["fitted"]
+    assert set(saved) == {"terms", "coef", "intercept", *_FITTED_STATE}
+    back = FOSModel.from_dict(json.loads(json.dumps(model.to_dict())))
+    for name in _FITTED_STATE:
+        np.testing.assert_equal(getattr(back, f"{name}_"), getattr(model, f"{name}_"))
+    assert back.lag_window_ == model.lag_window_
 
 
 def test_no_warnings_on_clean_fit():

@@ -7,6 +7,8 @@ code 2.  Anything else reaching the command line is a bug (exit code 1).
 
 from __future__ import annotations
 
+from sklearn.exceptions import NotFittedError as _SklearnNotFitted
+
 
 class FOSModelError(Exception):
     """Base class of all fosmodel errors."""
@@ -17,6 +19,15 @@ class InputError(FOSModelError, ValueError):
 
     The message names the problem precisely: the file, the column and the
     first offending sample where they apply.
+    """
+
+
+class NotFittedError(InputError, _SklearnNotFitted):
+    """A model was used before ``fit()``.
+
+    scikit-learn's ``NotFittedError`` (so ``FOSModel``, ``FOSRegressor`` and the baselines
+    all raise what scikit-learn users catch) and an :class:`InputError` (so the command line
+    reports it in one line).
     """
 
 

@@ -8,13 +8,19 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
-from .exceptions import InputError
+from .exceptions import InputError, NotFittedError
 
 
 def did_you_mean(name: str, options: Iterable[str]) -> str:
     """``" (did you mean 'x'?)"`` for the closest option, or an empty string."""
     close = difflib.get_close_matches(name, list(options), n=1, cutoff=0.6)
     return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def check_fitted(model: object, attribute: str) -> None:
+    """Raise :class:`NotFittedError` unless ``model`` has the fitted ``attribute``."""
+    if not hasattr(model, attribute):
+        raise NotFittedError(f"this {type(model).__name__} is not fitted yet; call fit() first")
 
 
 def check_int(value: object, name: str, minimum: int) -> int:

@@ -40,7 +40,7 @@ from scipy.linalg import solve_discrete_lyapunov
 from ..core.candidates import OUTPUT, Term
 from ..core.exceptions import InputError
 from ..core.levels import level_gain, level_tau, smooth_after
-from ..core.validation import as_channels, as_signal
+from ..core.validation import as_channels, as_signal, check_fitted
 from ..models.baselines import ARModel, GaussMarkovModel
 from ..models.model import FOSModel
 
@@ -364,13 +364,11 @@ class _Expansion:
 def _expansion(model: object) -> _Expansion:
     """The expansion of a fitted AR, Gauss-Markov or FOS model; InputError otherwise."""
     if isinstance(model, (ARModel, GaussMarkovModel)):
-        if not hasattr(model, "coef_"):
-            raise InputError(f"this {type(model).__name__} is not fitted yet; call fit() first")
+        check_fitted(model, "coef_")
         terms = tuple((float(c), Term(((OUTPUT, k),))) for k, c in enumerate(model.coef_, 1))
         return _Expansion(model.mean_, model.sigma2_, None, terms, {})
     if isinstance(model, FOSModel):
-        if not hasattr(model, "terms_"):
-            raise InputError("this FOSModel is not fitted yet; call fit() first")
+        check_fitted(model, "terms_")
         q = float(model.mse_path_[-1]) if len(model.mse_path_) else float(model.mse_null_)
         terms = tuple((float(c), Term.parse(n)) for n, c in zip(model.terms_, model.coef_))
         levels = tuple((name, level_gain(level_tau(name), model.rate))

@@ -27,7 +27,7 @@ from statsmodels.tsa.ar_model import AutoReg
 
 from .._version import __version__
 from ..core.exceptions import InputError
-from ..core.validation import as_signal, check_int, did_you_mean
+from ..core.validation import as_signal, check_fitted, check_int, did_you_mean
 from .dynamics import (
     ar_free_run,
     ar_one_step,
@@ -153,8 +153,7 @@ class _LinearAR(BaseEstimator):
         self.n_terms_ = len(self.coef_)
 
     def _check_fitted(self) -> None:
-        if not hasattr(self, "coef_"):
-            raise InputError(f"this {type(self).__name__} is not fitted yet; call fit() first")
+        check_fitted(self, "coef_")
 
     def predict(self, y: object) -> np.ndarray | pd.Series:
         """One-step-ahead prediction from the true past, aligned with ``y``.

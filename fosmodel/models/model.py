@@ -18,7 +18,7 @@ from __future__ import annotations
 import copy
 import logging
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -48,7 +48,7 @@ from ..core.levels import (
     level_tau,
     with_levels,
 )
-from ..core.validation import as_channels, as_signal
+from ..core.validation import as_channels, as_signal, check_fitted
 from .dynamics import (
     ar_free_run,
     ar_roots,
@@ -66,6 +66,31 @@ FORMAT = "fosmodel.FOSModel"
 _SAMPLES_PER_WEIGHT = 10  # below this per weight, a fit warns that its weights are rough
 FORMAT_VERSION = 1
 _BYTES_PER_VALUE = 8
+
+
+def _floats(values: object) -> list[float]:
+    return [float(v) for v in values]
+
+
+def _float_array(values: object) -> np.ndarray:
+    return np.asarray(values, dtype=float)
+
+
+#: The fitted state beside the terms, their weights and the intercept, declared once: each
+#: name (an attribute ``name_``) with how it is written to JSON and read back, for
+#: :meth:`FOSModel.fit`, :meth:`FOSModel.to_dict` and :meth:`FOSModel.from_dict` alike.
+_FITTED_STATE: dict[str, tuple[Callable[[object], object], Callable[[object], object]]] = {
+    "offsets": (lambda v: {str(k): float(x) for k, x in v.items()},
+                lambda v: {str(k): float(x) for k, x in v.items()}),
+    "mse_path": (_floats, _float_array),
+    "q": (_floats, _float_array),
+    "mse_null": (float, float),
+    "n_candidates": (int, int),
+    "n_samples": (int, int),
+    "stop_reason": (str, str),
+    "n_dependent": (int, int),
+    "target_name": (str, str),
+}
 
 
 class FOSModel(BaseEstimator):
@@ -267,16 +292,11 @@ class FOSModel(BaseEstimator):
 
         self.spec_ = spec
         self._set_terms([terms[i] for i in res.support], res.coef, res.intercept)
-        self.offsets_ = offsets
-        self.mse_path_ = res.mse_path
-        self.q_ = res.q
-        self.mse_null_ = res.mse_null
-        self.n_candidates_ = n_cand
-        self.n_samples_ = res.n_samples
-        self.lag_window_ = n0
-        self.stop_reason_ = res.stop_reason
-        self.n_dependent_ = res.n_dependent
-        self.target_name_ = getattr(y, "name", None) or OUTPUT
+        self._set_state({"offsets": offsets, "mse_path": res.mse_path, "q": res.q,
+                         "mse_null": res.mse_null, "n_candidates": n_cand,
+                         "n_samples": res.n_samples, "stop_reason": res.stop_reason,
+                         "n_dependent": res.n_dependent,
+                         "target_name": getattr(y, "name", None) or OUTPUT})
         thin = self._thin()
         if thin:
             warnings.warn(FitWarning(thin), stacklevel=2)
@@ -307,7 +327,15 @@ class FOSModel(BaseEstimator):
         return {n: check_level_series(exog[n], y, level_tau(n), self.rate, n)[lo:] - mu
                 for n in names}
 
+    def _set_state(self, values: Mapping[str, object]) -> None:
+        """The fitted state of :data:`_FITTED_STATE` (each ``name`` as ``name_``), all of it."""
+        if set(values) != set(_FITTED_STATE):
+            raise InputError(f"fitted state {sorted(values)} is not {sorted(_FITTED_STATE)}")
+        for name, (_, load) in _FITTED_STATE.items():
+            setattr(self, f"{name}_", load(values[name]))
+
     def _set_terms(self, terms: list[Term], coef: np.ndarray, intercept: float) -> None:
+        self.lag_window_ = self.spec_.lag_window
         self._terms = terms
         self.terms_ = [t.name for t in terms]
         self.coef_ = np.asarray(coef, dtype=float)
@@ -330,8 +358,7 @@ class FOSModel(BaseEstimator):
     # -- using the model -----------------------------------------------------------------
 
     def _check_fitted(self) -> None:
-        if not hasattr(self, "terms_"):
-            raise InputError("this FOSModel is not fitted yet; call fit() first")
+        check_fitted(self, "terms_")
 
     def _signals(self, y: object, exog: object, levels: bool = True) -> dict[str, np.ndarray]:
         """Centred output and inputs, with the level series given in ``exog`` if ``levels``."""
@@ -659,15 +686,8 @@ class FOSModel(BaseEstimator):
                 "terms": list(self.terms_),
                 "coef": [float(c) for c in self.coef_],
                 "intercept": float(self.intercept_),
-                "offsets": {k: float(v) for k, v in self.offsets_.items()},
-                "mse_path": [float(v) for v in self.mse_path_],
-                "q": [float(v) for v in self.q_],
-                "mse_null": float(self.mse_null_),
-                "n_candidates": int(self.n_candidates_),
-                "n_samples": int(self.n_samples_),
-                "stop_reason": self.stop_reason_,
-                "n_dependent": int(self.n_dependent_),
-                "target_name": str(self.target_name_),
+                **{name: save(getattr(self, f"{name}_"))
+                   for name, (save, _) in _FITTED_STATE.items()},
             },
             "meta": dict(meta or {}),
         }
@@ -700,16 +720,7 @@ class FOSModel(BaseEstimator):
                 raise InputError("coefficient count does not match the term count")
             model.spec_ = spec
             model._set_terms(terms, coef, float(fitted["intercept"]))
-            model.offsets_ = {str(k): float(v) for k, v in fitted["offsets"].items()}
-            model.mse_path_ = np.asarray(fitted["mse_path"], dtype=float)
-            model.q_ = np.asarray(fitted["q"], dtype=float)
-            model.mse_null_ = float(fitted["mse_null"])
-            model.n_candidates_ = int(fitted["n_candidates"])
-            model.n_samples_ = int(fitted["n_samples"])
-            model.lag_window_ = spec.lag_window
-            model.stop_reason_ = str(fitted["stop_reason"])
-            model.n_dependent_ = int(fitted["n_dependent"])
-            model.target_name_ = str(fitted["target_name"])
+            model._set_state({name: fitted[name] for name in _FITTED_STATE})
             missing = {OUTPUT, *spec.exog_lags, *spec.columns} - set(model.offsets_)
             if missing:
                 raise InputError(f"offsets missing for {', '.join(sorted(missing))}")
