@@ -446,3 +446,20 @@ def test_product_lags_restrict_the_cross_products():
     for term in model.terms_:
         if "*" in term or "^" in term:
             assert set(term.replace("^2", "").split("*")) <= {"y[n-1]", "y[n-2]"}
+
+
+def test_the_summary_gives_the_criteria_and_renders_as_html_and_latex():
+    y = np.random.default_rng(4).standard_normal(3000)
+    model = FOSModel(max_lag=3, degree=2, stop="max_terms", max_terms=3).fit(y)
+    summary = model.summary()
+    facts = dict(summary.info)
+    n, k, mse = model.n_samples_, len(model.terms_) + 1, float(model.mse_path_[-1])
+    assert float(facts["AIC"]) == pytest.approx(n * np.log(mse) + 2 * k, rel=1e-5)
+    assert float(facts["BIC"]) == pytest.approx(n * np.log(mse) + k * np.log(n), rel=1e-5)
+    assert float(facts["FPE"]) == pytest.approx(mse * (n + k) / (n - k), rel=1e-5)
+    html = summary._repr_html_()
+    assert all(term in html for term in model.terms_) and "<table" in html
+    latex = summary.as_latex()
+    assert "\\begin{tabular}" in latex and "Variance explained" in latex
+    assert "\\%" in latex and " %" not in latex.replace("\\%", "")  # every % escaped
+    assert "y[n-1]" in latex or "y[n-2]" in latex or "y[n-3]" in latex

@@ -39,7 +39,7 @@ from ..core.candidates import (
 from ..core.correlations import LagCorrelations, PooledCorrelations
 from ..core.derived import channels_read, derive, is_derived
 from ..core.exceptions import FitWarning, InputError
-from ..core.fos import StopRule, _DataCorrelations, _fos_kernel, center
+from ..core.fos import StopRule, _DataCorrelations, _fos_kernel, center, criterion
 from ..core.levels import (
     check_level_rate,
     check_level_series,
@@ -659,12 +659,16 @@ class FOSModel(BaseEstimator):
             ("Null MSE (variance)", f"{null:.6g}"),
             ("Final MSE", f"{final:.6g}"),
             ("Variance explained", f"{100 * (1 - final / null) if null > 0 else 0:.2f} %"),
+            *[(kind.upper(), f"{criterion(kind, final, len(self.terms_) + 1, self.n_samples_):.6g}")
+              for kind in ("aic", "bic", "fpe")],
             ("Output offset mu_y", f"{self.offsets_[OUTPUT]:.6g}"),
         ]
         notes = [
             "Terms are products of centred signals: y[n-l] stands for y[n-l] - mu_y."
             if self.center else "Terms are products of the raw signals.",
             "Q is the training MSE reduction of each term (FOS eq. 27), in selection order.",
+            "AIC = N ln MSE + 2k, BIC = N ln MSE + k ln N, FPE = MSE (N + k)/(N - k), with k the "
+            "terms and the constant, on the training window: the criteria the stop rules use.",
         ]
         thin = self._thin()
         if thin:

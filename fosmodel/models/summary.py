@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 from dataclasses import dataclass, field
 
 import pandas as pd
@@ -14,7 +15,9 @@ class Summary:
     """A titled block of key/value facts, a table, and notes.
 
     ``str(summary)`` renders it as fixed-width text; :meth:`to_frame` gives the
-    table and :meth:`as_markdown` a Markdown rendering for reports.
+    table, :meth:`as_markdown` a Markdown rendering for reports, :meth:`as_html` the
+    rendering a notebook shows (``_repr_html_``) and :meth:`as_latex` a LaTeX one (special
+    characters escaped) for a paper.
     """
 
     title: str
@@ -47,6 +50,39 @@ class Summary:
         notes = "\n".join(f"{i + 1}. {n}" for i, n in enumerate(self.notes))
         body = f"### {self.title}\n\n{head}\n\n{markdown_table(self.table)}"
         return body + (f"\n\n{notes}" if notes else "")
+
+
+    def as_html(self) -> str:
+        """The title, the facts, the table and the notes as HTML."""
+        facts = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>"
+                        for k, v in self.info)
+        notes = "".join(f"<li>{html.escape(n)}</li>" for n in self.notes)
+        return (f"<h4>{html.escape(self.title)}</h4><table>{facts}</table>"
+                + self.table.to_html(index=False, na_rep="", float_format=_fmt)
+                + (f"<ol>{notes}</ol>" if notes else ""))
+
+    def _repr_html_(self) -> str:
+        return self.as_html()
+
+    def as_latex(self) -> str:
+        """The facts and the table as two LaTeX ``tabular`` environments, the notes as an
+        ``enumerate``; every special character escaped."""
+        facts = "\n".join(f"{latex_escape(k)} & {latex_escape(v)} \\\\" for k, v in self.info)
+        notes = "\n".join(f"\\item {latex_escape(n)}" for n in self.notes)
+        return "\n".join([
+            f"% {latex_escape(self.title)}", "\\begin{tabular}{ll}", facts, "\\end{tabular}", "",
+            self.table.to_latex(index=False, na_rep="", float_format=_fmt, escape=True),
+            *(["\\begin{enumerate}", notes, "\\end{enumerate}"] if notes else [])])
+
+
+_LATEX_SPECIAL = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#",
+                  "_": r"\_", "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}",
+                  "^": r"\textasciicircum{}"}
+
+
+def latex_escape(text: str) -> str:
+    """``text`` with LaTeX's special characters escaped."""
+    return "".join(_LATEX_SPECIAL.get(c, c) for c in text)
 
 
 def markdown_table(frame: pd.DataFrame, digits: int = 6) -> str:
