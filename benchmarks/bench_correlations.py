@@ -5,7 +5,7 @@ search needs from tables of lagged-signal correlations with end corrections
 (:class:`fosmodel.core.correlations.LagCorrelations`);
 ``FOSModel(correlations="reference")`` builds the N x C candidate matrix with
 :func:`fosmodel.core.candidates.evaluate_terms` and runs the same kernel on it point
-by point (:class:`fosmodel.core.fos._DataCorrelations`).  Both are timed through
+by point (:class:`fosmodel.core.fos.DataCorrelations`).  Both are timed through
 ``fit`` (``stop="max_terms"``), interleaved, best of ``--repeats`` loops; the script
 checks that they select the same terms in the same order and that their
 weights agree to 1e-8 relative to the largest weight (exit code 1 if not).
@@ -13,7 +13,7 @@ weights agree to 1e-8 relative to the largest weight (exit code 1 if not).
 For reference it also times, on the matrix built beforehand (``build``, the
 ``evaluate_terms`` call), the public ``fosmodel.fos(X, y)`` on explicit data
 (which must select the same terms too) both ways: ``precompute=False``
-(``_DataCorrelations``, one Gram column per step) and ``precompute=True``
+(``DataCorrelations``, one Gram column per step) and ``precompute=True``
 (``_GramCorrelations``, the whole Gram matrix first).
 
 The signals are those of ``bench_scaling.py``: an AR(4) process with a small

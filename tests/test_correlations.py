@@ -6,7 +6,7 @@ import pytest
 from fosmodel.core import correlations
 from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
 from fosmodel.core.correlations import LagCorrelations
-from fosmodel.core.fos import _DataCorrelations
+from fosmodel.core.fos import DataCorrelations
 
 SPECS = [
     CandidateSpec(6, 1),
@@ -42,7 +42,7 @@ def test_fast_path_matches_reference(spec, table_degree, n):
     terms = [t for t in generate_terms(spec) if not t.is_constant]
     n0 = spec.lag_window
     fast = LagCorrelations(terms, signals, n0, table_degree=table_degree)
-    ref = _DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
+    ref = DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
     scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
     assert fast.n_samples == ref.n_samples
     _assert_close(fast.y_mean, ref.y_mean, scale)
@@ -64,7 +64,7 @@ def test_blocked_weighted_gram_matches_reference(spec, monkeypatch):
     terms = [t for t in generate_terms(spec) if not t.is_constant]
     n0 = spec.lag_window
     fast = LagCorrelations(terms, signals, n0, table_degree=3)
-    ref = _DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
+    ref = DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
     scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
     calls = []
     blocked = LagCorrelations._weighted_gram_sums

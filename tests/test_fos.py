@@ -7,13 +7,13 @@ import pytest
 
 from fosmodel.core.exceptions import InputError
 from fosmodel.core.fos import (
+    DataCorrelations,
     StopRule,
-    _DataCorrelations,
-    _fos_kernel,
     _GramCorrelations,
     center,
     criterion,
     fos,
+    fos_search,
 )
 
 
@@ -198,8 +198,8 @@ def test_stop_rule_validation():
 def test_kernel_runs_on_any_provider():
     X, y, _, _ = _problem(9)
     Xc, yc = X - X.mean(0), y - y.mean()
-    a = _fos_kernel(_DataCorrelations(Xc, yc), StopRule("max_terms", max_terms=5))
-    b = _fos_kernel(_GramCorrelations.from_data(Xc, yc), StopRule("max_terms", max_terms=5))
+    a = fos_search(DataCorrelations(Xc, yc), StopRule("max_terms", max_terms=5))
+    b = fos_search(_GramCorrelations.from_data(Xc, yc), StopRule("max_terms", max_terms=5))
     assert a.support.tolist() == b.support.tolist()
 
 

@@ -5,7 +5,7 @@ import pytest
 
 from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
 from fosmodel.core.correlations import LagCorrelations
-from fosmodel.core.fos import _DataCorrelations
+from fosmodel.core.fos import DataCorrelations
 from fosmodel.core.shapes import Geometry, direct_groups, layout, lookup, plan_batch
 
 
@@ -118,7 +118,7 @@ def test_a_reused_layout_gives_the_reference_on_other_data(spec):
         rng = np.random.default_rng(seed)
         signals = {"y": rng.standard_normal(n) + 2.0, "temp": rng.uniform(15, 30, n)}
         fast = LagCorrelations(terms, signals, n0)
-        ref = _DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
+        ref = DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
         scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
         for got, want in ((fast.target, ref.target), (fast.diag, ref.diag),
                           (fast.means, ref.means)):

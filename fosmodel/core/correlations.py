@@ -19,8 +19,8 @@ Which moments come from the tables, and how shapes are keyed and grouped,
 does not depend on the data: :mod:`fosmodel.core.shapes` plans it, once per
 candidate set for the batch every fit starts with.  This module does the sums.
 
-:class:`LagCorrelations` is the fast provider for :func:`fosmodel.core.fos._fos_kernel`;
-the point-by-point reference is :class:`fosmodel.core.fos._DataCorrelations` on the
+:class:`LagCorrelations` is the fast provider for :func:`fosmodel.core.fos.fos_search`;
+the point-by-point reference is :class:`fosmodel.core.fos.DataCorrelations` on the
 matrix from :func:`fosmodel.core.candidates.evaluate_terms`.
 """
 

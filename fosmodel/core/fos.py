@@ -6,12 +6,12 @@ correlations with every candidate (one Gram column per step; the full C x C
 matrix is never formed).  Where these come from is the job of a correlation
 provider:
 
-* :class:`_DataCorrelations`  - point by point from a candidate matrix (reference);
+* :class:`DataCorrelations`  - point by point from a candidate matrix (reference);
 * :class:`_GramCorrelations`  - from a precomputed Gram matrix;
 * :class:`fosmodel.core.correlations.LagCorrelations` - Korenberg's speed-up from
   correlation tables of the lagged signals, with end corrections.
 
-:func:`_fos_kernel` runs the search on any provider.  The constant ``p_0 = 1``
+:func:`fos_search` runs the search on any provider.  The constant ``p_0 = 1``
 is treated in closed form as the first orthogonal function (eqs. 17-18): after
 it, ``D(m, 1..)`` are covariances, which is also how the kernel keeps its
 precision on signals with a large offset.  The orthogonal functions ``w_m``
@@ -171,7 +171,7 @@ class FOSResult:
         return float(self.mse_path[-1]) if len(self.mse_path) else self.mse_null
 
 
-class _DataCorrelations:
+class DataCorrelations:
     """Correlations point by point from the candidate matrix ``X`` (N x C): the reference path."""
 
     def __init__(self, X: np.ndarray, y: np.ndarray) -> None:
@@ -209,14 +209,20 @@ class _GramCorrelations:
         return self.gram[:, j]
 
 
-def _fos_kernel(
+def fos_search(
     corr: Correlations,
     stop: StopRule,
     *,
     intercept: bool = True,
     dependence_tol: float = 1e-10,
 ) -> FOSResult:
-    """Forward search by implicit Gram-Schmidt on the correlations ``corr``.
+    """Forward search by implicit Gram-Schmidt on the correlations ``corr``: the FOS kernel.
+
+    Every FOS fit runs here, on a correlation provider (:class:`Correlations`):
+    :class:`DataCorrelations` point by point on a candidate matrix (the reference),
+    the Gram matrix in :func:`fos`, or Korenberg's lag tables
+    (:class:`fosmodel.core.correlations.LagCorrelations`, the fast path).  It checks
+    nothing: its callers (:func:`fos`, :class:`fosmodel.models.model.FOSModel`) validate.
 
     Notation of the FOS paper: ``D(c, r)`` (eq. 19) for candidate c against
     the r-th selected term, ``alpha_cr = D(c, r) / D(r, r)`` (eq. 20),
@@ -426,8 +432,8 @@ def fos(
         y_off = float(y_off)
     if precompute == "auto":
         precompute = X.shape[1] <= 64
-    corr = _GramCorrelations.from_data(X, y) if precompute else _DataCorrelations(X, y)
-    res = _fos_kernel(corr, rule, intercept=fit_intercept, dependence_tol=dependence_tol)
+    corr = _GramCorrelations.from_data(X, y) if precompute else DataCorrelations(X, y)
+    res = fos_search(corr, rule, intercept=fit_intercept, dependence_tol=dependence_tol)
     if fit_intercept:
         res.intercept = float(y_off + res.intercept - x_off[res.support] @ res.coef)
     return res

@@ -33,7 +33,7 @@ from scipy import stats
 from scipy.ndimage import median_filter
 from scipy.signal import zoom_fft
 
-from ..core.fos import StopRule, _fos_kernel
+from ..core.fos import StopRule, fos_search
 
 ALPHA = 1e-3
 
@@ -187,7 +187,7 @@ def refine_frequency(
     target = (np.repeat(sums, phases) * np.exp(1j * phase)).real / n
     corr = _SinusoidCorrelations(omega, phase, time[0], 1.0 / rate, n, target,
                                  float(xc @ xc) / n)
-    res = _fos_kernel(corr, StopRule("max_terms", max_terms=1), intercept=True)
+    res = fos_search(corr, StopRule("max_terms", max_terms=1), intercept=True)
     return float(omega[res.support[0]] / (2 * np.pi)) if len(res.support) else f0
 
 

@@ -7,7 +7,7 @@ The model (FOS paper, eqs. 14-15) is
 where each ``P_m`` is a product of lagged, centred outputs ``y[n-l] - mu_y``
 (1 <= l <= L), local levels of the centred output (:mod:`fosmodel.core.levels`),
 lagged centred inputs ``x[n-k] - mu_x`` (0 <= k <= K) and user-given columns,
-chosen by :func:`fosmodel.core.fos._fos_kernel` among all such
+chosen by :func:`fosmodel.core.fos.fos_search` among all such
 candidates up to the cross-product degree.  Centring on the training means
 (``center=True``) makes the selected terms independent of the sensor bias:
 adding an offset to the record leaves the model unchanged but for ``mu``.
@@ -39,7 +39,7 @@ from ..core.candidates import (
 from ..core.correlations import LagCorrelations, PooledCorrelations
 from ..core.derived import channels_read, derive, is_derived
 from ..core.exceptions import FitWarning, InputError
-from ..core.fos import StopRule, _DataCorrelations, _fos_kernel, center, criterion
+from ..core.fos import DataCorrelations, StopRule, center, criterion, fos_search
 from ..core.levels import (
     check_level_rate,
     check_level_series,
@@ -281,14 +281,14 @@ class FOSModel(BaseEstimator):
             with one_blas_thread():  # short products: threads cost more than they give
                 parts = [LagCorrelations(terms, piece, n0) for piece in pieces]
                 corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
-                res = _fos_kernel(corr, rule, intercept=True,
+                res = fos_search(corr, rule, intercept=True,
                                   dependence_tol=self.dependence_tol)
         else:
             blocks = [evaluate_terms(terms, piece, n0) for piece in pieces]
-            corr = _DataCorrelations(
+            corr = DataCorrelations(
                 blocks[0] if len(blocks) == 1 else np.vstack(blocks),
                 np.concatenate([piece[OUTPUT][n0:] for piece in pieces]))
-            res = _fos_kernel(corr, rule, intercept=True, dependence_tol=self.dependence_tol)
+            res = fos_search(corr, rule, intercept=True, dependence_tol=self.dependence_tol)
 
         self.spec_ = spec
         self._set_terms([terms[i] for i in res.support], res.coef, res.intercept)
@@ -488,7 +488,7 @@ class FOSModel(BaseEstimator):
         with one_blas_thread():
             parts = [LagCorrelations(self._terms, piece, n0) for piece in pieces]
             corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
-            res = _fos_kernel(corr, StopRule("max_terms", max_terms=len(self._terms)),
+            res = fos_search(corr, StopRule("max_terms", max_terms=len(self._terms)),
                               intercept=True, dependence_tol=self.dependence_tol)
         new = copy.copy(self)
         new._set_terms([self._terms[i] for i in res.support], res.coef, res.intercept)
