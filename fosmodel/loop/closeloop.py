@@ -37,7 +37,8 @@ from ..core.derived import fast_name
 from ..core.exceptions import InputError
 from ..core.levels import level_name, level_series, level_tau, levels_for
 from ..core.validation import as_channels, as_signal
-from ..models.model import BoundModel, FOSModel
+from ..models.bound import BoundModel
+from ..models.model import FOSModel
 from ..noise.metrics import equivalent_position_error, one_step_mse, outage_metrics, to_si_scale
 from .diagnose import (
     AuxChannels,

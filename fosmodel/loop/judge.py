@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ..models.model import BoundModel
+from ..models.bound import BoundModel
 from ..noise.metrics import free_run_errors
 
 MAX_WINDOWS = 100  # most outage windows of the evaluation test

@@ -32,7 +32,8 @@ from numpy.polynomial import Polynomial
 from ..core.candidates import OUTPUT, Term, evaluate_terms
 from ..core.exceptions import InputError
 from ..core.validation import as_signal
-from ..models.model import BoundModel, FOSModel
+from ..models.bound import BoundModel
+from ..models.model import FOSModel
 from ..noise.allan import allan_deviation, fit_noise
 from ..noise.metrics import one_step_mse, outage_metrics
 
