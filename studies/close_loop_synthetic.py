@@ -65,7 +65,7 @@ def truth_metrics(rec, y, channels, config, res):
     for effect, _ in true_effects(rec.truth):
         if effect.kind == "level":
             effect = Effect("level", taus=res.level_taus)
-        family = family.add(effect, channels, len(y), config.rate, res.segments["train"])
+        family = family.add(effect, channels, len(y), config.rate, res.segments.train)
     return score_family(y, channels, config, family)
 
 

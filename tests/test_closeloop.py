@@ -43,7 +43,7 @@ def test_loop_finds_the_effect_and_recovers_half_of_what_the_truth_gives(name, s
         assert abs(step.effect.freq_hz - true.freq_hz) < 0.05
     metric = "outage_mse" if slow else "mse"
     family = CandidateFamily(config.max_lag).add(true, channels, len(y), rec.rate,
-                                                 res.segments["train"])
+                                                 res.segments.train)
     truth = score_family(y, channels, config, family)
     before, after = res.before[metric], res.after[metric]
     assert before - after >= 0.5 * (before - truth[metric]) > 0
@@ -94,7 +94,7 @@ def test_a_level_is_rejected_where_there_is_no_slow_error():
     family = CandidateFamily(config.max_lag)
     current = fitter.fit(family)
     effect = Effect("level", taus=config.level_taus)
-    trial = fitter.fit(family.add(effect, {}, len(y), 100.0, segments["train"]))
+    trial = fitter.fit(family.add(effect, {}, len(y), 100.0, segments.train))
     verdict = _Judge(fitter, current, y, segments, config)(trial, effect)
     assert not verdict["accepted"]
     assert close_loop(y, {}, config).steps == []
@@ -103,7 +103,7 @@ def test_a_level_is_rejected_where_there_is_no_slow_error():
 def test_the_prediction_segment_never_decides():
     rec, y, channels, config, res = _run("undeclared_vibration", 0)
     z = y.copy()
-    predict = res.segments["predict"]
+    predict = res.segments.predict
     z[predict] += 5 * np.sin(np.arange(predict.stop - predict.start) * 0.37)  # a new effect
     other = close_loop(z, channels, config)
     assert [s.effect for s in other.steps] == [s.effect for s in res.steps]

@@ -6,10 +6,11 @@ from scipy.signal import lfilter
 from statsmodels.tsa.arima_process import ArmaProcess
 
 from fosmodel.core.exceptions import InputError
+from fosmodel.io.split import Split
 from fosmodel.models.dynamics import ar_free_run, ar_one_step
 from fosmodel.noise.denoise import denoise
 from fosmodel.study import harness
-from fosmodel.study.harness import Split, StudyConfig
+from fosmodel.study.harness import StudyConfig
 from fosmodel.study.runner import run_study
 
 RATE = 10.0

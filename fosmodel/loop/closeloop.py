@@ -37,6 +37,7 @@ from ..core.derived import fast_name
 from ..core.exceptions import InputError
 from ..core.levels import level_name, level_series, level_tau, levels_for
 from ..core.validation import as_channels, as_signal
+from ..io.split import Split
 from ..models.bound import BoundModel
 from ..models.model import FOSModel
 from ..noise.metrics import equivalent_position_error, one_step_mse, outage_metrics, to_si_scale
@@ -165,7 +166,7 @@ class LoopResult:
     """
 
     config: LoopConfig
-    segments: dict[str, slice]
+    segments: Split
     before: dict
     after: dict
     steps: list[Step]
@@ -250,7 +251,7 @@ def close_loop(
     segments = _segments(len(y), config)
     fitter = _Fitter(y, channels, segments, config)
     taus = config.level_taus if config.level_taus is not None else levels_for(
-        y[segments["train"]], config.rate)
+        y[segments.train], config.rate)
     clock = time.perf_counter()
     family = CandidateFamily(config.max_lag)
     current = base = fitter.fit(family)
@@ -271,7 +272,7 @@ def close_loop(
         trials = []
         for i, effect in enumerate(candidates, 1):
             clock = time.perf_counter()
-            trial_family = family.add(effect, channels, len(y), config.rate, segments["train"])
+            trial_family = family.add(effect, channels, len(y), config.rate, segments.train)
             trial = fitter.fit(trial_family)
             trials.append((effect, trial_family, trial, judge(trial, effect)))
             say(f"  [{i}/{len(candidates)}] {effect.describe()}: "
@@ -289,13 +290,13 @@ def close_loop(
         waiting += [k[0] for k in kept if k[0] is not effect]
         steps.append(Step(effect, _new_terms(current, model), _lag_of(effect, model),
                           _tau_of(effect, model), comparison,
-                          _metrics(model, y, segments["predict"], config)))
+                          _metrics(model, y, segments.predict, config)))
         added.append(effect)
         current = model
         say(f"kept {effect.describe()}")
         findings = diagnose(current)
-    return LoopResult(config, segments, _metrics(base, y, segments["predict"], config),
-                      _metrics(current, y, segments["predict"], config), steps, rejected,
+    return LoopResult(config, segments, _metrics(base, y, segments.predict, config),
+                      _metrics(current, y, segments.predict, config), steps, rejected,
                       findings_before, findings, base, current, residual_before,
                       _residual(current, y, segments), tuple(taus))
 
@@ -313,10 +314,11 @@ def score_family(
     channels = as_channels(channels, list(channels or {}), len(y))
     segments = _segments(len(y), config)
     model = _Fitter(y, channels, segments, config).fit(family)
-    return _metrics(model, y, segments["predict"], config)
+    return _metrics(model, y, segments.predict, config)
 
 
-def _segments(n: int, config: LoopConfig) -> dict[str, slice]:
+def _segments(n: int, config: LoopConfig) -> Split:
+    """The loop's split of ``n`` samples by ``config``'s fractions, each segment long enough."""
     a, b = round(config.train * n), round((config.train + config.evaluate) * n)
     need_eval = 3 * round(config.eval_horizon_s * config.rate)
     need_pred = max(round(config.horizon_s * config.rate) + 1,
@@ -328,7 +330,7 @@ def _segments(n: int, config: LoopConfig) -> dict[str, slice]:
             f"segment needs {need_eval} samples (three {config.eval_horizon_s:g} s outages) and "
             f"the prediction segment {need_pred} (a {config.horizon_s:g} s outage and two "
             f"{max(config.taus):g} s bias windows)")
-    return {"train": slice(0, a), "evaluate": slice(a, b), "predict": slice(b, n)}
+    return Split.by_fraction(n, config.train, config.evaluate)
 
 
 class _Fitter:
@@ -341,7 +343,7 @@ class _Fitter:
 
     def __init__(self, y, channels, segments, config):
         self.y, self.channels, self.config = y, channels, config
-        self.train = segments["train"]
+        self.train = segments.train
         self._levels: dict[str, np.ndarray] = {}
 
     def levels(self, taus: tuple[float, ...]) -> dict[str, np.ndarray]:
@@ -376,10 +378,10 @@ class _Judge:
 
     def __init__(self, fitter: _Fitter, current: BoundModel, y, segments, config) -> None:
         self.fitter, self.y, self.config = fitter, y, config
-        self.segment = segments["evaluate"]
+        self.segment = segments.evaluate
         self.horizon = round(config.eval_horizon_s * config.rate)
         self.starts = outage_windows(self.segment, self.horizon)
-        end = segments["train"].stop
+        end = segments.train.stop
         self.origins = np.unique(np.linspace(end / 2, end, config.origins).round().astype(int))
         if len(self.origins) > 1 and self.origins[0] <= max(4 * config.max_lag, 100):
             self.origins = self.origins[-1:]  # too short a past to refit on
@@ -509,7 +511,7 @@ def _clearly_better(gains: list[float], rival: list[float]) -> bool:
 
 def _residual(model: BoundModel, y: np.ndarray, segments) -> np.ndarray:
     """One-step residual over the fitting segment, from the lag window on."""
-    stop = segments["train"].stop
+    stop = segments.train.stop
     return (y[:stop] - model.predict(y[:stop]))[model.lag_window_:]
 
 
@@ -533,7 +535,7 @@ class _Diagnostics:
 
     def __init__(self, y, channels, segments, config) -> None:
         self.y, self.channels, self.config = y, channels, config
-        self.stop = segments["train"].stop
+        self.stop = segments.train.stop
         self._aux: dict[int, AuxChannels] = {}
 
     def __call__(self, model: BoundModel) -> list[Finding]:

@@ -48,6 +48,7 @@ from ..core.blas import one_blas_thread
 from ..core.exceptions import InputError, UnstableModelWarning
 from ..core.levels import levels_for
 from ..core.validation import as_signal
+from ..io.split import Split
 from ..models.baselines import METHOD_LABELS, make_baseline
 from ..models.levelar import LocalLevelAR
 from ..models.model import FOSModel
@@ -57,40 +58,6 @@ from ..noise.metrics import equivalent_position_error, one_step_mse, outage_metr
 METHODS = ("fos", "yw", "cov", "burg", "gm")
 PROTOCOLS = ("paper", "fair")
 LEVEL = "+level"  # suffix of a method about the local level
-
-
-@dataclass(frozen=True)
-class Split:
-    """Sample ranges of the three segments."""
-
-    train: slice
-    evaluate: slice
-    predict: slice
-
-    @classmethod
-    def by_duration(
-        cls, n: int, rate: float, train_s: float, evaluate_s: float, min_predict: int = 1,
-        why: str = "",
-    ) -> Split:
-        """Split ``n`` samples at ``rate`` Hz: ``train_s`` s, then ``evaluate_s`` s, then the rest.
-
-        Raises
-        ------
-        InputError
-            If a segment is empty or the prediction segment is shorter than ``min_predict``
-            (``why`` says what needs them).
-        """
-        a, b = round(train_s * rate), round((train_s + evaluate_s) * rate)
-        if a < 1 or b <= a:
-            raise InputError(f"the split {train_s:g} s / {evaluate_s:g} s leaves an empty "
-                             "training or evaluation segment")
-        if n - b < min_predict:
-            raise InputError(
-                f"the record has {n} samples ({n / rate:.6g} s at {rate:g} Hz); the split "
-                f"{train_s:g} s / {evaluate_s:g} s leaves {max(n - b, 0)} samples to predict, "
-                f"{min_predict} are needed{why}"
-            )
-        return cls(slice(0, a), slice(a, b), slice(b, n))
 
 
 @dataclass(frozen=True)
