@@ -60,7 +60,7 @@ from matplotlib.figure import Figure
 
 from .._version import __version__
 from ..core.exceptions import InputError
-from ..io.output import save_figure, write_tables
+from ..io.output import save_figure, write_tables, write_text
 from ..models.summary import Summary
 from .allan import AllanResult, NoiseFit, allan_deviation, fit_noise, write_allan
 from .metrics import to_si_scale
@@ -478,7 +478,7 @@ def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str) -> list[Path]:
     if all(noise.of(s) for s in SENSORS):
         files["imu.yaml"] = noise.kalibr_yaml()
     for name, text in files.items():
-        (out_dir / name).write_text(text)
+        write_text(out_dir / name, text)
         paths.append(out_dir / name)
     return paths
 
