@@ -219,3 +219,21 @@ def test_center_makes_exactly_constant_signals_and_columns_zero():
         assert np.array_equal(mean, arr.mean(axis=0))
         assert (out[:, [1, 3]] == 0.0).all()
         assert np.array_equal(out[:, [0, 2]], (arr - arr.mean(axis=0))[:, [0, 2]])
+
+
+def test_each_stop_rule_decides_for_itself():
+    """StopRule.should_stop / reached against the rules written out (n = 1000, k = 3)."""
+    from fosmodel.core.fos import StopRule
+
+    n, k, mse = 1000, 3, 2.0
+    korenberg = StopRule("korenberg")
+    assert korenberg.should_stop(0.0079, mse, k, n)  # 0.0079 <= 4 (2 - 0.0079) / 1000
+    assert not korenberg.should_stop(0.0081, mse, k, n)
+    aic = StopRule("aic")
+    gain = 2.0 / n  # AIC falls iff n ln(mse_new / mse) < -2, i.e. mse_new < mse e^(-2/n)
+    assert aic.should_stop(mse * (1 - np.exp(-gain)) * 0.99, mse, k, n)
+    assert not aic.should_stop(mse * (1 - np.exp(-gain)) * 1.01, mse, k, n)
+    assert not StopRule("max_terms").should_stop(0.0, mse, k, n)
+    variance = StopRule("variance", tol=0.5)
+    assert variance.reached(1.0, 2.0, 9.0) and not variance.reached(1.01, 2.0, 9.0)
+    assert StopRule("mean_square", tol=0.1).reached(0.9, 2.0, 9.0)

@@ -93,6 +93,25 @@ class StopRule:
         ):
             raise InputError(f"max_terms must be a non-negative integer, got {self.max_terms!r}")
 
+    def reached(self, mse: float, mse_null: float, y_mean_sq: float) -> bool:
+        """Whether the residual ``mse`` is low enough already (``variance``, ``mean_square``)."""
+        if self.kind == "variance":
+            return mse <= self.tol * mse_null
+        if self.kind == "mean_square":
+            return mse <= self.tol * y_mean_sq
+        return False
+
+    def should_stop(self, q: float, mse: float, k: int, n: int) -> bool:
+        """Whether the rule refuses the best next term, whose MSE reduction ``q`` takes the
+        residual from ``mse`` to ``mse - q``, with ``k`` parameters (the constant counted)
+        before it, on ``n`` samples (``korenberg`` and the information criteria)."""
+        mse_new = max(mse - q, 0.0)
+        if self.kind == "korenberg":
+            return q <= 4.0 * mse_new / n
+        if self.kind in _CRITERIA:
+            return criterion(self.kind, mse_new, k + 1, n) >= criterion(self.kind, mse, k, n)
+        return False
+
     def to_dict(self) -> dict:
         return {"kind": self.kind, "tol": self.tol, "max_terms": self.max_terms}
 
@@ -248,13 +267,6 @@ def fos_search(
         cap, cap_reason = stop.max_terms, "max_terms"
     if n - int(intercept) - 1 < cap:  # keep at least one residual degree of freedom
         cap, cap_reason = max(n - int(intercept) - 1, 0), "samples"
-    threshold = None
-    if stop.kind == "variance":
-        threshold = stop.tol * mse_null
-    elif stop.kind == "mean_square":
-        threshold = stop.tol * corr.y_mean_sq
-    k_params = int(intercept)
-    ic = criterion(stop.kind, mse, k_params, n) if stop.kind in _CRITERIA else None
     ic_path: list[float] = []
 
     active = np.ones(n_cand, dtype=bool)
@@ -271,7 +283,7 @@ def fos_search(
         if len(support) >= cap:
             reason = cap_reason
             break
-        if threshold is not None and mse <= threshold:
+        if stop.reached(mse, mse_null, corr.y_mean_sq):
             reason = stop.kind
             break
         newly = d_rem <= live_floor
@@ -292,16 +304,9 @@ def fos_search(
         if q <= rounding:  # what is left is rounding error: a noise-free target is fit
             reason = "rounding"
             break
-        if stop.kind == "korenberg" and q <= 4.0 * mse_new / n:
-            reason = "korenberg"
+        if stop.should_stop(q, mse, int(intercept) + len(support), n):
+            reason = stop.kind
             break
-        if ic is not None:
-            ic_new = criterion(stop.kind, mse_new, k_params + 1, n)
-            if ic_new >= ic:
-                reason = stop.kind
-                break
-            ic, k_params = ic_new, k_params + 1
-            ic_path.append(ic)
         r = len(support)
         d_col = corr.column(j) - means * means[j]
         if r:
@@ -321,6 +326,8 @@ def fos_search(
         q_path.append(q)
         mse = mse_new  # eq. 28
         mse_path.append(mse)
+        if stop.kind in _CRITERIA:
+            ic_path.append(criterion(stop.kind, mse, int(intercept) + len(support), n))
 
     m = len(support)
     sel = np.asarray(support, dtype=np.intp)
