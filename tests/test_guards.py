@@ -283,11 +283,11 @@ def test_ctrl_c_on_a_running_loop(tmp_path):
                                                                   index=False)
     argv = [sys.executable, "-m", "fosmodel.cli", "close-loop", str(tmp_path / "r.csv"),
             "--column", "gx", "--out", str(tmp_path / "loop"), "--json", str(tmp_path / "l.json")]
-    proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True)
-    for line in proc.stderr:  # wait for the loop to be under way
-        if "round 1" in line:
-            break
-    proc.send_signal(signal.SIGINT)
-    err = proc.stderr.read()
-    assert proc.wait(timeout=60) == 130 and "fosmodel: interrupted" in err
+    with subprocess.Popen(argv, stderr=subprocess.PIPE, text=True) as proc:
+        for line in proc.stderr:  # wait for the loop to be under way
+            if "round 1" in line:
+                break
+        proc.send_signal(signal.SIGINT)
+        err = proc.stderr.read()
+        assert proc.wait(timeout=60) == 130 and "fosmodel: interrupted" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv"]

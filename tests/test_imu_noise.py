@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -230,7 +231,7 @@ def test_the_static_imu_scenario_gives_back_its_white_noise_on_every_axis():
 
 def test_the_command_writes_nothing_over_its_record_and_nothing_on_a_bad_column(
         six_axes, tmp_path, capsys):
-    before = open(six_axes, "rb").read()
+    before = Path(six_axes).read_bytes()
     out = tmp_path / "report"
     common = ["allan", six_axes, "--rate", RATE, "--out", out]
     for extra, message in ((["--columns", "gx_dps,ax_g", "--json", six_axes], "--json"),
@@ -238,4 +239,4 @@ def test_the_command_writes_nothing_over_its_record_and_nothing_on_a_bad_column(
         code, _, err = _run([*common, *extra], capsys)
         assert code == 2 and len(err.strip().splitlines()) == 1, err
         assert err.startswith("fosmodel: error: ") and message in err
-        assert not out.exists() and open(six_axes, "rb").read() == before
+        assert not out.exists() and Path(six_axes).read_bytes() == before
