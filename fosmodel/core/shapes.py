@@ -30,6 +30,20 @@ class Geometry:
     0 is an absent factor.  A shape's key is its sorted codes in base
     ``n_channels * (n0 + 1) + 1``, with as many digits as fit in an int64
     (at least ``table_degree``).
+
+    A worked example: with the output y (channel 0), one input u (channel 1) and
+    lags up to ``n0 = 2``, the moments of ``y[n-1] u[n-2]`` and ``y[n-2] u[n-3]``
+    shift to the same shape (y lag 0, u lag 1): codes 1 and 5, key
+    ``1 + 5 * 7 = 36`` in base 7.  One cross-correlation sum over the record
+    serves both; each differs from it by its own end correction (1 and 2 samples).
+
+    >>> import numpy as np
+    >>> geometry = Geometry(n0=2, n_channels=2, width=2, table_degree=2)
+    >>> lags = np.array([[1, 2], [2, 3]])
+    >>> keys, codes = geometry.shape_keys(np.array([[0, 1], [0, 1]]), lags,
+    ...                                   np.ones((2, 2), bool), lags.min(axis=1))
+    >>> keys.tolist(), codes.tolist()
+    ([36, 36], [[1, 5], [1, 5]])
     """
 
     n0: int
