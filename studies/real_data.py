@@ -125,28 +125,12 @@ DATASHEET = [
 ]
 
 
-def _value(fit, term: str, value: float | None = None) -> str:
-    """A value in navigation units (the coefficient by default), or its upper limit."""
-    if value is None and not fit.resolved[term]:
-        return "< " + _value(fit, term, fit.limits[term])
-    if value is not None and not np.isfinite(value):
-        return "-"
-    nav = fit.navigation(term, value)
-    return f"{nav[0]:.3g} {nav[1]}" if nav else f"{value:.3g}"
-
-
 def allan_row(name: str, axis: str, res, fit) -> dict:
     """The fitted coefficients beside the classic read-offs and the datasheet value."""
     band = (res.taus >= 0.1) & (res.taus <= 1000)
     ratio = fit.model_adev(res.taus[band]) / res.adev[band]
     read = fit.readoff
-    return {"Record": name, "Axis": axis, "N fitted": _value(fit, "N"),
-            "N read-off (1 s)": _value(fit, "N", read["N"]), "B fitted": _value(fit, "B"),
-            "B read-off (min/0.664)": _value(fit, "B", read["B"]),
-            "in-run bias stability (min)": (f"{_value(fit, 'B', read['min_adev'])} at "
-                                            f"{read['min_tau_s']:.3g} s"
-                                            if np.isfinite(read["min_adev"]) else "-"),
-            "K fitted": _value(fit, "K"), "K read-off (3 s)": _value(fit, "K", read["K"]),
+    return {"Record": name, "Axis": axis, **fit.conventions(),
             "line (Hz)": f"{res.line_hz:.3g}" if res.line_hz else "-",
             "fit/data min, 0.1-1000 s": ratio.min(), "fit/data max": ratio.max(),
             "misses": len(fit.misses()),

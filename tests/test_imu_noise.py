@@ -240,3 +240,21 @@ def test_the_command_writes_nothing_over_its_record_and_nothing_on_a_bad_column(
         assert code == 2 and len(err.strip().splitlines()) == 1, err
         assert err.startswith("fosmodel: error: ") and message in err
         assert not out.exists() and Path(six_axes).read_bytes() == before
+
+
+def test_each_axis_sets_every_convention_side_by_side(noise):
+    """The table's fitted values (a limit as '< value'), read-offs and datasheet minimum come
+    from NoiseFit.conventions, in navigation units."""
+    table = noise.table()
+    for a, (_, row) in zip(noise.axes, table.iterrows()):
+        fit = a.fit
+        for term in ("N", "K"):
+            value, kind = fit.conservative(term)
+            nav, units = fit.navigation(term, value)
+            expected = f"{'< ' if kind == 'upper limit' else ''}{nav:.3g} {units}"
+            assert row[f"{term} fitted"] == fit.conventions()[f"{term} fitted"] == expected
+        minimum = fit.readoff["min_adev"]
+        assert row["in-run bias stability (min)"] == (
+            "-" if not math.isfinite(minimum) else
+            f"{fit.navigation('B', minimum)[0]:.3g} {fit.navigation('B', minimum)[1]} at "
+            f"{fit.readoff['min_tau_s']:.3g} s")

@@ -541,6 +541,35 @@ class NoiseFit:
                          "not describe the curve there.")
         return notes
 
+    def conventions(self) -> dict[str, str]:
+        """N, B and K fitted (an upper limit as ``"< value"``) beside the classic read-offs and
+        the datasheets' in-run bias stability, as text in navigation units (``"-"`` where a
+        read-off does not exist)."""
+        read = self.readoff
+        minimum = read.get("min_adev", math.nan)
+        return {
+            "N fitted": self._fitted_text("N"),
+            "N read-off (1 s)": self._nav_text("N", read.get("N", math.nan)),
+            "B fitted": self._fitted_text("B"),
+            "B read-off (min/0.664)": self._nav_text("B", read.get("B", math.nan)),
+            "in-run bias stability (min)": (f"{self._nav_text('B', minimum)} at "
+                                            f"{read['min_tau_s']:.3g} s"
+                                            if math.isfinite(minimum) else "-"),
+            "K fitted": self._fitted_text("K"),
+            "K read-off (3 s)": self._nav_text("K", read.get("K", math.nan)),
+        }
+
+    def _fitted_text(self, term: str) -> str:
+        value, kind = self.conservative(term)
+        return ("< " if kind == "upper limit" else "") + self._nav_text(term, value)
+
+    def _nav_text(self, term: str, value: float) -> str:
+        """``value`` of a term in navigation units, in the record's if they are unknown."""
+        if not math.isfinite(value):
+            return "-"
+        nav = self.navigation(term, value)
+        return f"{nav[0]:.3g} {nav[1]}" if nav else f"{value:.3g} {self.units(term)}"
+
     def _both(self, term: str, value: float) -> str:
         """``value`` of a term in the record's units, and in navigation units if known."""
         text = f"{value:.4g} {self.units(term)}"

@@ -376,30 +376,12 @@ def _finite(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def _nav_text(fit: NoiseFit, term: str, value: float) -> str:
-    if not math.isfinite(value):
-        return "-"
-    nav = fit.navigation(term, value)
-    return f"{nav[0]:.3g} {nav[1]}" if nav else f"{value:.3g} {fit.units(term)}"
-
-
 def _row(a: AxisNoise) -> dict[str, Any]:
-    fit, res, read = a.fit, a.result, a.fit.readoff
-    row: dict[str, Any] = {"Column": a.axis.column, "Sensor": a.axis.sensor}
-    for term, label in (("N", "N read-off (1 s)"), ("B", "B read-off (min/0.664)"),
-                        ("K", "K read-off (3 s)")):
-        value, kind = a.value(term)
-        prefix = "< " if kind == "upper limit" else ""
-        row[f"{term} fitted"] = prefix + _nav_text(fit, term, value)
-        row[label] = _nav_text(fit, term, read.get(term, math.nan))
-    minimum = read.get("min_adev", math.nan)
-    row["in-run bias stability (min)"] = (f"{_nav_text(fit, 'B', minimum)} at "
-                                          f"{read['min_tau_s']:.3g} s"
-                                          if math.isfinite(minimum) else "-")
-    ratio = fit.model_adev(fit.fitted_taus) / res.adev[fit.start:]
-    row["fit/data min (fitted taus)"], row["max"] = float(ratio.min()), float(ratio.max())
-    row["misses"] = len(fit.misses())
-    return row
+    fit = a.fit
+    ratio = fit.model_adev(fit.fitted_taus) / a.result.adev[fit.start:]
+    return {"Column": a.axis.column, "Sensor": a.axis.sensor, **fit.conventions(),
+            "fit/data min (fitted taus)": float(ratio.min()), "max": float(ratio.max()),
+            "misses": len(fit.misses())}
 
 
 def _sensor_figure(axes: Sequence[AxisNoise], sensor: str) -> Figure:
