@@ -41,7 +41,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from doc_pages import show_figure
-from kalman_static import GM, RATE, choose_fos_lag, filter_position_error, fit_models, statistics
+from kalman_static import (
+    GM,
+    RATE,
+    choose_fos_lag,
+    cycle_label,
+    filter_position_error,
+    fit_models,
+    statistics,
+)
 from matplotlib.figure import Figure
 
 from fosmodel.filter.allan_statespace import (
@@ -131,7 +139,7 @@ def run_filters(fits: dict[str, AxisFit]) -> pd.DataFrame:
     rows = []
     for (axis, cycle, name), (err, variance) in zip(keys, results):
         stats = statistics(err, variance)
-        rows.append({"Axis": axis, "Cycle": f"{cycle} s up / {cycle} s pred", "Model": name,
+        rows.append({"Axis": axis, "Cycle": cycle_label(cycle), "Model": name,
                      **stats, "Sigma / RMS": stats["Filter sigma [m]"] / stats["RMS [m]"]})
     return pd.DataFrame(rows)
 
