@@ -76,12 +76,15 @@ def _float_array(values: object) -> np.ndarray:
     return np.asarray(values, dtype=float)
 
 
+def _float_dict(values: Mapping[object, object]) -> dict[str, float]:
+    return {str(k): float(v) for k, v in values.items()}
+
+
 #: The fitted state beside the terms, their weights and the intercept, declared once: each
 #: name (an attribute ``name_``) with how it is written to JSON and read back, for
 #: :meth:`FOSModel.fit`, :meth:`FOSModel.to_dict` and :meth:`FOSModel.from_dict` alike.
 _FITTED_STATE: dict[str, tuple[Callable[[object], object], Callable[[object], object]]] = {
-    "offsets": (lambda v: {str(k): float(x) for k, x in v.items()},
-                lambda v: {str(k): float(x) for k, x in v.items()}),
+    "offsets": (_float_dict, _float_dict),
     "mse_path": (_floats, _float_array),
     "q": (_floats, _float_array),
     "mse_null": (float, float),
