@@ -58,6 +58,7 @@ from .dynamics import (
     warn_if_unstable,
 )
 from .freerun import run_many, run_one, split_expansion
+from .rawform import expand_centred
 from .summary import Summary
 
 log = logging.getLogger(__name__)
@@ -737,6 +738,19 @@ class FOSModel(BaseEstimator):
             raise InputError(f"corrupted model file: {type(exc).__name__}: {exc}") from None
         model.meta_ = dict(data.get("meta") or {})
         return model
+
+    def raw_coefficients(self) -> dict[str, float]:
+        """The fitted model written in the raw signals: term name -> weight, ``"1"`` first.
+
+        The products of centred factors ``z - mu`` multiplied out into raw monomials
+        (:mod:`fosmodel.models.rawform`), ``mu_y`` moved into the constant; the raw form
+        predicts what :meth:`predict` does.  A model fitted with ``center=False`` comes
+        back as its terms and its constant ``intercept_``.
+        """
+        self._check_fitted()
+        raw = expand_centred(self._terms, self.coef_, self.intercept_, self.offsets_)
+        return {term.name: weight for term, weight in raw.items()}
+
 
 
 def _cut(exog: object, names: Sequence[str], n: int, lo: int) -> dict[str, object] | None:
