@@ -237,3 +237,34 @@ def test_each_stop_rule_decides_for_itself():
     variance = StopRule("variance", tol=0.5)
     assert variance.reached(1.0, 2.0, 9.0) and not variance.reached(1.01, 2.0, 9.0)
     assert StopRule("mean_square", tol=0.1).reached(0.9, 2.0, 9.0)
+
+
+def _ols_std_errors(A, y):
+    """Standard errors point by point: s^2 (A'A)^-1 with s^2 = RSS / (N - k)."""
+    sol, *_ = np.linalg.lstsq(A, y, rcond=None)
+    resid = y - A @ sol
+    s2 = float(resid @ resid) / (A.shape[0] - A.shape[1])
+    return np.sqrt(s2 * np.diag(np.linalg.inv(A.T @ A)))
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("intercept", [True, False])
+def test_standard_errors_equal_least_squares(seed, intercept):
+    X, y, _, _ = _problem(seed, noise=0.5)
+    res = fos_search(DataCorrelations(X, y), StopRule("max_terms", max_terms=6),
+                     intercept=intercept)
+    A = X[:, res.support]
+    if intercept:
+        A = np.column_stack([np.ones(len(y)), A])
+    se = _ols_std_errors(A, y)
+    got = np.r_[res.intercept_se, res.coef_se] if intercept else res.coef_se
+    np.testing.assert_allclose(got, se, rtol=1e-8)
+    if not intercept:
+        assert math.isnan(res.intercept_se)
+
+
+def test_standard_errors_of_constant_only_model_are_those_of_the_mean():
+    y = np.random.default_rng(2).normal(3.0, 2.0, 200)
+    res = fos_search(DataCorrelations(np.ones((200, 1)), y), StopRule("korenberg"))
+    assert res.coef_se.shape == (0,)
+    assert res.intercept_se == pytest.approx(y.std(ddof=1) / math.sqrt(200), rel=1e-12)

@@ -162,6 +162,15 @@ class FOSResult:
         Which condition ended the search.
     criterion_path : ndarray or None
         Information criterion after each term (rules aic/bic/fpe/mdl).
+    coef_se : ndarray
+        Standard errors of ``coef`` as ordinary least squares gives them for
+        the selected terms, ``sqrt(s^2 [(X'X)^-1]_mm)`` with ``s^2`` the residual
+        sum of squares over ``n_samples - k`` (k weights, the constant included).
+        They take the terms as fixed in advance and the residuals as white: they
+        ignore the search that chose the terms (after a search over many
+        candidates they are too small) and any correlation left in the residuals.
+    intercept_se : float
+        Standard error of ``intercept`` on the same terms (nan without an intercept).
     """
 
     support: np.ndarray
@@ -179,6 +188,8 @@ class FOSResult:
     stop: StopRule
     stop_reason: str
     criterion_path: np.ndarray | None = field(default=None)
+    coef_se: np.ndarray = field(default_factory=lambda: np.empty(0))
+    intercept_se: float = math.nan
 
     @property
     def n_terms(self) -> int:
@@ -337,13 +348,43 @@ def fos_search(
     coef = (solve_triangular(alpha_sel.T, g_arr, lower=False, unit_diagonal=True,
                              check_finite=False) if m else g_arr)
     a0 = float(y_mean - means[sel] @ coef) if intercept else 0.0
+    coef_se, intercept_se = _std_errors(alpha_sel, d_hist[np.arange(m), sel], means[sel],
+                                        mse, n, intercept)
     return FOSResult(
         support=sel, coef=coef, intercept=a0, g=g_arr, q=np.asarray(q_path),
         mse_path=np.asarray(mse_path), mse_null=float(mse_null), y_mean_sq=float(corr.y_mean_sq),
         y_var=float(corr.y_mean_sq - corr.y_mean**2), n_samples=n, n_candidates=n_cand,
         n_dependent=int(dependent.sum()), stop=stop, stop_reason=reason,
         criterion_path=np.asarray(ic_path) if stop.kind in _CRITERIA else None,
+        coef_se=coef_se, intercept_se=intercept_se,
     )
+
+
+def _std_errors(
+    alpha: np.ndarray, d: np.ndarray, means: np.ndarray, mse: float, n: int, intercept: bool,
+) -> tuple[np.ndarray, float]:
+    """Least-squares standard errors of the weights from the search's own factors.
+
+    The selected terms' (centred, with an intercept) Gram matrix of means is
+    ``S = A diag(d) A^T`` with ``A`` the unit lower-triangular ``alpha`` of the
+    selected terms (eq. 20) and ``d`` their ``D(m, m)`` (eq. 19), so
+    ``S^-1 = W^T diag(1/d) W`` with ``W = A^-1``: no matrix is inverted.  The
+    covariance of the weights is ``s^2 / N S^-1`` with ``s^2 = N MSE / (N - k)``;
+    the intercept ``ybar - means . coef`` adds ``s^2 / N`` for the mean of y.
+    """
+    m = len(d)
+    dof = n - m - int(intercept)
+    if dof <= 0:
+        return np.full(m, np.nan), math.nan
+    per_n = mse / dof  # s^2 / N
+    inv_a = solve_triangular(alpha, np.eye(m), lower=True, unit_diagonal=True,
+                             check_finite=False)
+    scaled = inv_a / np.sqrt(d)[:, None]  # diag(d)^-1/2 W: S^-1 = scaled^T scaled
+    coef_se = np.sqrt(per_n * np.einsum("ri,ri->i", scaled, scaled))
+    if not intercept:
+        return coef_se, math.nan
+    spread = scaled @ means
+    return coef_se, float(np.sqrt(per_n * (1.0 + spread @ spread)))
 
 
 def center(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

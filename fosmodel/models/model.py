@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import logging
+import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 
@@ -65,7 +66,11 @@ log = logging.getLogger(__name__)
 
 FORMAT = "fosmodel.FOSModel"
 _SAMPLES_PER_WEIGHT = 10  # below this per weight, a fit warns that its weights are rough
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Fitted state a file of an older format version lacks, and what it reads as there:
+#: version 1 carried no standard errors.
+_ADDED_IN = {2: {"coef_se": lambda n_terms: [math.nan] * n_terms,
+                 "intercept_se": lambda n_terms: math.nan}}
 _BYTES_PER_VALUE = 8
 
 
@@ -86,6 +91,8 @@ def _float_dict(values: Mapping[object, object]) -> dict[str, float]:
 #: :meth:`FOSModel.fit`, :meth:`FOSModel.to_dict` and :meth:`FOSModel.from_dict` alike.
 _FITTED_STATE: dict[str, tuple[Callable[[object], object], Callable[[object], object]]] = {
     "offsets": (_float_dict, _float_dict),
+    "coef_se": (_floats, _float_array),
+    "intercept_se": (float, float),
     "mse_path": (_floats, _float_array),
     "q": (_floats, _float_array),
     "mse_null": (float, float),
@@ -161,6 +168,12 @@ class FOSModel(BaseEstimator):
         MSE reduction ``Q`` of each term (eq. 27).
     mse_null_ : float
         Training MSE of the constant-only model (the variance of y).
+    coef_se_, intercept_se_ : ndarray, float
+        Least-squares standard errors of ``coef_`` and ``intercept_`` on the
+        selected terms (:attr:`fosmodel.core.fos.FOSResult.coef_se`).  They take
+        the terms as given: the search that chose them out of
+        ``n_candidates_`` makes them too small, and correlated residuals make
+        them too small again; read them as a scale, not as a test of the terms.
     n_candidates_, n_samples_, lag_window_, stop_reason_, n_dependent_, target_name_
 
     Examples
@@ -296,7 +309,8 @@ class FOSModel(BaseEstimator):
 
         self.spec_ = spec
         self._set_terms([terms[i] for i in res.support], res.coef, res.intercept)
-        self._set_state({"offsets": offsets, "mse_path": res.mse_path, "q": res.q,
+        self._set_state({"offsets": offsets, "coef_se": res.coef_se,
+                         "intercept_se": res.intercept_se, "mse_path": res.mse_path, "q": res.q,
                          "mse_null": res.mse_null, "n_candidates": n_cand,
                          "n_samples": res.n_samples, "stop_reason": res.stop_reason,
                          "n_dependent": res.n_dependent,
@@ -497,6 +511,7 @@ class FOSModel(BaseEstimator):
         new = copy.copy(self)
         new._set_terms([self._terms[i] for i in res.support], res.coef, res.intercept)
         new.mse_path_, new.q_, new.mse_null_ = res.mse_path, res.q, res.mse_null
+        new.coef_se_, new.intercept_se_ = res.coef_se, res.intercept_se
         new.n_samples_, new.stop_reason_ = res.n_samples, "refit"
         new.n_dependent_ = res.n_dependent
         return new
@@ -641,6 +656,7 @@ class FOSModel(BaseEstimator):
         table = pd.DataFrame({
             "term": ["1", *self.terms_],
             "coef": [self.intercept_, *self.coef_],
+            "std err": [self.intercept_se_, *self.coef_se_],
             "Q (MSE reduction)": [np.nan, *self.q_],
             "% var": [np.nan, *share],
             "cum % var": [np.nan, *np.cumsum(share)],
@@ -671,6 +687,9 @@ class FOSModel(BaseEstimator):
             "Terms are products of centred signals: y[n-l] stands for y[n-l] - mu_y."
             if self.center else "Terms are products of the raw signals.",
             "Q is the training MSE reduction of each term (FOS eq. 27), in selection order.",
+            "Std err is least squares' on the selected terms as if they were fixed in advance: "
+            "it ignores the search over the candidates and residual correlation (both make it "
+            "too small).",
             "AIC = N ln MSE + 2k, BIC = N ln MSE + k ln N, FPE = MSE (N + k)/(N - k), with k the "
             "terms and the constant, on the training window: the criteria the stop rules use.",
         ]
@@ -728,6 +747,7 @@ class FOSModel(BaseEstimator):
                 raise InputError("coefficient count does not match the term count")
             model.spec_ = spec
             model._set_terms(terms, coef, float(fitted["intercept"]))
+            fitted = {**_older_state(version, fitted, len(terms)), **fitted}
             model._set_state({name: fitted[name] for name in _FITTED_STATE})
             missing = {OUTPUT, *spec.exog_lags, *spec.columns} - set(model.offsets_)
             if missing:
@@ -751,6 +771,11 @@ class FOSModel(BaseEstimator):
         raw = expand_centred(self._terms, self.coef_, self.intercept_, self.offsets_)
         return {term.name: weight for term, weight in raw.items()}
 
+
+def _older_state(version: int, fitted: Mapping[str, object], n_terms: int) -> dict[str, object]:
+    """The fitted state a file of format ``version`` lacks, as it reads there."""
+    return {name: default(n_terms) for added, names in _ADDED_IN.items() if version < added
+            for name, default in names.items() if name not in fitted}
 
 
 def _cut(exog: object, names: Sequence[str], n: int, lo: int) -> dict[str, object] | None:
