@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from records import bursty_csv, spiky_csv
 from scipy.signal import lfilter
 
 from fosmodel import FOSModel, cli
@@ -272,8 +271,8 @@ def test_close_loop_too_short_exit_2(record, tmp_path, capsys):
     assert code == 2 and "too short for the split" in err
 
 
-def test_cli_bursty_time_needs_uniform_and_prints_notes(tmp_path, capsys):
-    p, effective = bursty_csv(tmp_path)
+def test_cli_bursty_time_needs_uniform_and_prints_notes(tmp_path, capsys, bursty_csv):
+    p, effective = bursty_csv()
     fit = ["fit", p, "--column", "gx", "--max-lag", 2, "--out", tmp_path / "m.json"]
     code, _, err = _run(fit, capsys)
     assert code == 2 and err.count("\n") == 1 and "pass --uniform" in err
@@ -284,8 +283,8 @@ def test_cli_bursty_time_needs_uniform_and_prints_notes(tmp_path, capsys):
         effective)
 
 
-def test_cli_scale_and_outliers(tmp_path, capsys):
-    p, _, _ = spiky_csv(tmp_path, with_time=False)
+def test_cli_scale_and_outliers(tmp_path, capsys, spiky_csv):
+    p, _, _ = spiky_csv(with_time=False)
     out = tmp_path / "m.json"
     code, _, err = _run(["fit", p, "--column", "a", "--scale", "a=1/2", "--scale", "b=0.5",
                          "--outliers", "clip", "--out", out], capsys)

@@ -3,7 +3,8 @@
 The table (docs/pages/cli.md, ``## Errors``) has one row per input problem: the problem,
 the message after ``fosmodel: error: `` (``...`` where it names a file or goes on), and the
 exit code.  ``BUILDERS`` maps each problem, spelt as in the table, to a function that writes
-the input and returns the command line; a row without a builder, or a builder without a row,
+the input and returns the command line (``FILE_BUILDERS`` those whose input is a record file of
+conftest's fixtures); a row without a builder, or a builder without a row,
 fails, so that the table and the code cannot drift apart.
 """
 
@@ -14,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from records import bursty_csv, spiky_csv
 
 from fosmodel import cli
 
@@ -123,9 +123,6 @@ BUILDERS = {
     "time goes backwards": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.02,2\n0.01,3\n"),
     "gap in time without `--fill` or `--segments`":
         lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,2\n0.02,3\n0.5,4\n0.51,5\n"),
-    "bursty host time without `--uniform`":
-        lambda tmp: ["fit", str(bursty_csv(tmp)[0]), "--column", "gx", "--out",
-                     str(tmp / "m.json")],
     "`--rate` disagreeing with the time column": lambda tmp: _fit(tmp, _record(), "--rate", "50"),
     "time column in nanoseconds": lambda tmp: _fit(tmp, "time,gx\n0,1\n1e7,2\n2e7,3\n"),
     "one sample and no `--rate`": lambda tmp: _fit(tmp, "time,gx\n0,1\n"),
@@ -162,9 +159,6 @@ BUILDERS = {
                                                           _write(tmp, _record(3000))),
     "gaps kept with `--segments` where a contiguous record is needed":
         lambda tmp: _report("allan", tmp, _gappy(tmp), "--segments"),
-    "outliers dropped without a time column":
-        lambda tmp: ["fit", str(spiky_csv(tmp, with_time=False)[0]), "--column", "a",
-                     "--outliers", "drop", "--out", str(tmp / "m.json")],
     "model file missing": lambda tmp: _predict(tmp, _record(), str(tmp / "none.json")),
     "model file not JSON": lambda tmp: _predict(tmp, _record(), _write(tmp, "{", "m.json")),
     "model file damaged inside":
@@ -179,6 +173,25 @@ BUILDERS = {
     "report directory is a file":
         lambda tmp: _report("allan", tmp, _write(tmp, _record()))[:-1] + [str(tmp / "rec.csv")],
 }
+
+# Problems whose input is one of conftest's record files: (the fixture that writes it, a
+# builder of the command line from the directory and that fixture's writer, given at call time)
+FILE_BUILDERS = {
+    "bursty host time without `--uniform`":
+        ("bursty_csv", lambda tmp, write: ["fit", str(write()[0]), "--column", "gx", "--out",
+                                           str(tmp / "m.json")]),
+    "outliers dropped without a time column":
+        ("spiky_csv", lambda tmp, write: ["fit", str(write(with_time=False)[0]), "--column", "a",
+                                          "--outliers", "drop", "--out", str(tmp / "m.json")]),
+}
+
+
+def _build(problem, tmp, request):
+    """The command line of ``problem``'s row, its input written into ``tmp``."""
+    if problem in FILE_BUILDERS:
+        fixture, build = FILE_BUILDERS[problem]
+        return build(tmp, request.getfixturevalue(fixture))
+    return BUILDERS[problem](tmp)
 
 
 def _snapshot(directory):
@@ -198,13 +211,14 @@ def test_the_readme_has_the_errors_table():
 
 
 def test_every_builder_has_a_row():
-    assert sorted(set(BUILDERS) - {row[0] for row in ROWS}) == []
+    assert sorted({*BUILDERS, *FILE_BUILDERS} - {row[0] for row in ROWS}) == []
 
 
 @pytest.mark.parametrize("problem, shown, code", ROWS, ids=[row[0] for row in ROWS])
-def test_each_row_of_the_errors_table(problem, shown, code, tmp_path, capsys):
-    assert problem in BUILDERS, f"no test builds the documentation's error row {problem!r}"
-    argv = BUILDERS[problem](tmp_path)
+def test_each_row_of_the_errors_table(problem, shown, code, tmp_path, capsys, request):
+    assert problem in {*BUILDERS, *FILE_BUILDERS}, (
+        f"no test builds the documentation's error row {problem!r}")
+    argv = _build(problem, tmp_path, request)
     capsys.readouterr()  # what building printed
     before = _snapshot(tmp_path)
     assert _run(argv) == int(code)

@@ -3,7 +3,6 @@ import gzip
 import numpy as np
 import pandas as pd
 import pytest
-from records import bursty_csv, spiky_csv
 
 from fosmodel.core.exceptions import InputError
 from fosmodel.io import loader
@@ -208,8 +207,8 @@ def test_no_integer_hint_for_float_columns(tmp_path):
 # --- host receive time that arrives in bursts -------------------------------------------------
 
 
-def test_bursty_time_is_refused_without_uniform(tmp_path):
-    p, effective = bursty_csv(tmp_path)
+def test_bursty_time_is_refused_without_uniform(bursty_csv):
+    p, effective = bursty_csv()
     message = (rf"{p}: column 't_s' \(lines 2-401\) looks like a host's bursty receive time "
                rf"\(median interval 0.001 s, mean 0.00991 s\); effective rate {effective:.6g} Hz")
     with pytest.raises(InputError, match=message) as err:
@@ -217,8 +216,8 @@ def test_bursty_time_is_refused_without_uniform(tmp_path):
     assert "pass --uniform" in str(err.value) and "or --rate HZ" in str(err.value)
 
 
-def test_bursty_time_with_uniform_or_rate(tmp_path):
-    p, effective = bursty_csv(tmp_path)
+def test_bursty_time_with_uniform_or_rate(bursty_csv):
+    p, effective = bursty_csv()
     rec = load_record(p, uniform=True)
     assert rec.rate == pytest.approx(effective) and rec.n_samples == 400
     np.testing.assert_allclose(rec.time, np.arange(400) / effective)
@@ -260,8 +259,8 @@ def _bounds(x):
     return center - 10 * sigma, center + 10 * sigma
 
 
-def test_outliers_are_reported_and_kept(tmp_path):
-    p, a, b = spiky_csv(tmp_path, with_time=False)
+def test_outliers_are_reported_and_kept(spiky_csv):
+    p, a, b = spiky_csv(with_time=False)
     rec = load_record(p)
     assert set(rec.outliers) == {"a", "b"}
     np.testing.assert_array_equal(rec.outliers["a"], [100, 700])
@@ -272,8 +271,8 @@ def test_outliers_are_reported_and_kept(tmp_path):
     assert "at sample(s) 100, 700 (line(s) 102, 702); kept" in note
 
 
-def test_outliers_clipped_to_the_bound(tmp_path):
-    p, a, _ = spiky_csv(tmp_path, with_time=False)
+def test_outliers_clipped_to_the_bound(spiky_csv):
+    p, a, _ = spiky_csv(with_time=False)
     rec = load_record(p, outliers="clip")
     low, high = _bounds(a)
     expected = a.copy()
@@ -282,8 +281,8 @@ def test_outliers_clipped_to_the_bound(tmp_path):
     assert any("clipped to [" in n for n in rec.notes)
 
 
-def test_outliers_dropped_keep_the_time_gap(tmp_path):
-    p, a, b = spiky_csv(tmp_path, with_time=True)
+def test_outliers_dropped_keep_the_time_gap(spiky_csv):
+    p, a, b = spiky_csv(with_time=True)
     rec = load_record(p, outliers="drop")
     keep = np.setdiff1d(np.arange(1000), [100, 700])
     assert rec.n_samples == 998 and rec.rate == pytest.approx(100)
@@ -295,8 +294,8 @@ def test_outliers_dropped_keep_the_time_gap(tmp_path):
                for n in rec.notes)
 
 
-def test_dropping_without_time_is_refused(tmp_path):
-    p, _, _ = spiky_csv(tmp_path, with_time=False)
+def test_dropping_without_time_is_refused(tmp_path, spiky_csv):
+    p, _, _ = spiky_csv(with_time=False)
     with pytest.raises(InputError, match=f"{p}: --outliers drop would remove 2 sample"
                                          r"\(s\) from a record without a time column, which "
                                          "breaks the uniform sample spacing.*use --outliers clip"):

@@ -5,7 +5,6 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
-from narx import narx
 from scipy.signal import lfilter
 
 from fosmodel import FOSModel, InputError, Term, UnstableModelWarning
@@ -24,7 +23,7 @@ def _ar5(seed, n=1_000_000):
     return y, {}, {f"y[n-{k + 1}]": -p[k + 1] for k in range(5)}
 
 
-def _case(name, seed):
+def _case(name, seed, narx):
     if name == "linear":
         return (*_ar5(seed), dict(max_lag=50), True)
     rng = np.random.default_rng(100 + seed)
@@ -62,7 +61,7 @@ CASES = ["linear", "linear_exog", "nonlinear_exog", "nonlinear", "nonlinear_two_
 @pytest.mark.parametrize("seed", [0, 1])
 @pytest.mark.parametrize("name", CASES)
 @pytest.mark.parametrize("stop", ["max_terms", "bic"])
-def test_recovers_true_terms_and_coefficients(name, seed, stop):
+def test_recovers_true_terms_and_coefficients(name, seed, stop, narx):
     """Exact term set and weights within 1 %.
 
     With ``max_terms`` set to the true count this checks the greedy search
@@ -70,7 +69,7 @@ def test_recovers_true_terms_and_coefficients(name, seed, stop):
     (about 0.2 % each), so over hundreds of candidates an extra term now and
     then is the criterion's nature, not the search's; the first two seeds are used.
     """
-    y, exog, truth, spec, center = _case(name, seed)
+    y, exog, truth, spec, center = _case(name, seed, narx)
     model = FOSModel(**spec, stop=stop, max_terms=len(truth) if stop == "max_terms" else None,
                      center=center).fit(y, exog)
     assert 50 <= model.n_candidates_ <= 300 and 5 <= len(truth) <= 15
@@ -80,8 +79,8 @@ def test_recovers_true_terms_and_coefficients(name, seed, stop):
         assert fitted[term] == pytest.approx(coef, rel=0.01), term
 
 
-def test_fast_and_reference_correlations_select_the_same_model():
-    y, exog, truth, spec, center = _case("nonlinear_exog", 0)
+def test_fast_and_reference_correlations_select_the_same_model(narx):
+    y, exog, truth, spec, center = _case("nonlinear_exog", 0, narx)
     y, exog = y[:3000], {k: v[:3000] for k, v in exog.items()}
     fast = FOSModel(**spec, center=center).fit(y, exog)
     ref = FOSModel(**spec, center=center, correlations="reference").fit(y, exog)
@@ -90,8 +89,8 @@ def test_fast_and_reference_correlations_select_the_same_model():
     np.testing.assert_allclose(fast.mse_path_, ref.mse_path_, rtol=1e-9)
 
 
-def test_coefficients_equal_least_squares_on_selected_terms():
-    y, exog, _, spec, center = _case("nonlinear_two_inputs", 0)
+def test_coefficients_equal_least_squares_on_selected_terms(narx):
+    y, exog, _, spec, center = _case("nonlinear_two_inputs", 0, narx)
     model = FOSModel(**spec, stop="max_terms", max_terms=20, center=center).fit(y, exog)
     X = evaluate_terms([Term.parse(t) for t in model.terms_], {"y": y, **exog}, model.lag_window_)
     A = np.column_stack([np.ones(len(X)), X])
@@ -102,8 +101,8 @@ def test_coefficients_equal_least_squares_on_selected_terms():
 
 
 @pytest.mark.parametrize("name", ["linear_exog", "nonlinear_exog"])
-def test_scale_and_offset_invariance(name):
-    y, exog, _, spec, _ = _case(name, 0)
+def test_scale_and_offset_invariance(name, narx):
+    y, exog, _, spec, _ = _case(name, 0, narx)
     y, exog = y[:20000], {k: v[:20000] for k, v in exog.items()}
     ref = FOSModel(**spec).fit(y, exog)
     for yy in (y * 1e6, y + 1e4, y * 1e-6 + 3.0):
@@ -214,8 +213,8 @@ def test_unstable_model_is_reported_not_simulated_silently():
         model.simulate(y[:10], 100)
 
 
-def test_nonlinear_divergence_is_reported():
-    y, exog, truth, spec, center = _case("nonlinear", 0)
+def test_nonlinear_divergence_is_reported(narx):
+    y, exog, truth, spec, center = _case("nonlinear", 0, narx)
     model = FOSModel(**spec, center=center).fit(y[:5000])
     with pytest.warns(UnstableModelWarning, match="diverged"):
         sim = model.simulate(np.full(20, 50.0), 50)

@@ -3,7 +3,6 @@ import math
 
 import numpy as np
 import pytest
-from narx import narx
 from scipy.signal import lfilter
 from statsmodels.tsa.arima_process import arma_acf, arma_acovf
 from statsmodels.tsa.stattools import acf
@@ -28,7 +27,7 @@ def _sparse_record(n=20_000, seed=2):
     return lfilter([1.0], [1.0, -0.6, 0.0, -0.3], e) + 5.0
 
 
-def _exog_record():
+def _exog_record(narx):
     """Output lags 1-2, input lags 0 and 2 (input offset 25) and a trend column, offset 3."""
     rng = np.random.default_rng(4)
     n = 20_000
@@ -39,7 +38,7 @@ def _exog_record():
     return y, exog
 
 
-def _nonlinear_record():
+def _nonlinear_record(narx):
     rng = np.random.default_rng(6)
     exog = {"u": rng.uniform(-1.0, 1.0, 20_000)}
     truth = {"y[n-1]": 0.5, "y[n-2]": -0.2, "y[n-1]*y[n-2]": 0.1,
@@ -48,8 +47,8 @@ def _nonlinear_record():
     return y, exog
 
 
-def _fitted_nonlinear():
-    y, exog = _nonlinear_record()
+def _fitted_nonlinear(narx):
+    y, exog = _nonlinear_record(narx)
     return FOSModel(max_lag=3, degree=2, exog_lags={"u": 2}, max_terms=8,
                     stop="max_terms").fit(y, exog), y, exog
 
@@ -111,8 +110,8 @@ def test_sparse_fos_keeps_the_selected_lags_in_a_companion_matrix():
                                model.predict(y[:500]), rtol=0, atol=1e-10)
 
 
-def test_fos_with_inputs_and_offsets_predicts_like_the_model():
-    y, exog = _exog_record()
+def test_fos_with_inputs_and_offsets_predicts_like_the_model(narx):
+    y, exog = _exog_record(narx)
     model = FOSModel(max_lag=3, exog_lags={"temp": 3}, columns=["trend"]).fit(y, exog)
     assert {"temp[n-0]", "temp[n-2]", "trend"} <= set(model.terms_)
     ss = to_state_space(model)
@@ -124,8 +123,8 @@ def test_fos_with_inputs_and_offsets_predicts_like_the_model():
                                rtol=0, atol=1e-10)
 
 
-def test_nonlinear_fos_predicts_through_f():
-    model, y, exog = _fitted_nonlinear()
+def test_nonlinear_fos_predicts_through_f(narx):
+    model, y, exog = _fitted_nonlinear(narx)
     assert any("*" in t or "^" in t for t in model.terms_)
     ss = to_nonlinear_state_space(model)
     inputs = ss.input_matrix(exog, len(y))
@@ -154,8 +153,8 @@ def test_simulation_with_noise_equals_the_model_free_run():
         model.simulate(AR2[:50], 300, noise=noise), rtol=0, atol=1e-10)
 
 
-def test_nonlinear_simulation_equals_the_model_free_run():
-    model, y, exog = _fitted_nonlinear()
+def test_nonlinear_simulation_equals_the_model_free_run(narx):
+    model, y, exog = _fitted_nonlinear(narx)
     ss = to_nonlinear_state_space(model)
     n0, steps = 50, 200
     noise = 0.1 * RNG.standard_normal(steps)
@@ -191,8 +190,8 @@ def test_output_autocorrelation_matches_the_model(kind):
 # -- Jacobian ------------------------------------------------------------------------------
 
 
-def test_jacobian_matches_finite_differences():
-    model, _, _ = _fitted_nonlinear()
+def test_jacobian_matches_finite_differences(narx):
+    model, _, _ = _fitted_nonlinear(narx)
     ss = to_nonlinear_state_space(model)
     rng = np.random.default_rng(8)
     h = 1e-6
@@ -255,23 +254,23 @@ def test_a_vector_driving_noise_enters_through_every_column_of_g():
     np.testing.assert_array_equal(system.Q, ss.Q)
 
 
-def test_to_dict_is_json_and_complete():
+def test_to_dict_is_json_and_complete(narx):
     lin = to_state_space(FOSModel(max_lag=3).fit(AR2)).to_dict()
-    non = to_nonlinear_state_space(_fitted_nonlinear()[0]).to_dict()
+    non = to_nonlinear_state_space(_fitted_nonlinear(narx)[0]).to_dict()
     for d in (lin, non):
         assert json.loads(json.dumps(d)) == d
     assert lin["kind"] == "linear" and len(lin["Phi"]) == len(lin["state_names"])
     assert non["kind"] == "nonlinear" and non["terms"][0]["name"] == "1"
 
 
-def test_refusals_name_the_problem():
+def test_refusals_name_the_problem(narx):
     with pytest.raises(InputError, match="ARModel is not fitted"):
         to_state_space(ARModel(2))
     with pytest.raises(InputError, match="FOSModel is not fitted"):
         to_nonlinear_state_space(FOSModel())
     with pytest.raises(InputError, match="cannot export a list"):
         to_state_space([0.5])
-    model = _fitted_nonlinear()[0]
+    model = _fitted_nonlinear(narx)[0]
     with pytest.raises(InputError, match=r"nonlinear term\(s\).*to_nonlinear_state_space"):
         to_state_space(model)
     ss = to_state_space(FOSModel(max_lag=2).fit(AR2))
