@@ -1,6 +1,7 @@
 """The documentation's examples run: the Python and command-line blocks of the README and of
 every page in docs/pages."""
 
+import doctest
 import re
 import shlex
 from pathlib import Path
@@ -28,6 +29,23 @@ def _commands():
 def test_python_blocks_run(page, code, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     exec(compile(code, page, "exec"), {})
+
+
+def _sessions():
+    """The interactive (pycon) blocks of each page, as one session: later blocks use earlier ones."""
+    by_page: dict[str, list[str]] = {}
+    for page, block in _blocks("pycon"):
+        by_page.setdefault(page, []).append(block)
+    return [(page, "\n".join(blocks)) for page, blocks in by_page.items()]
+
+
+@pytest.mark.parametrize(("page", "session"), _sessions(), ids=lambda value: value[:40])
+def test_interactive_blocks_print_what_they_show(page, session, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    test = doctest.DocTestParser().get_doctest(session, {}, page, page, 0)
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    runner.run(test)
+    assert runner.summarize(verbose=False).failed == 0
 
 
 def test_first_two_commands_install_demo_and_test():

@@ -92,40 +92,40 @@ class LagCorrelations:
         n, n0 = len(signals[OUTPUT]), start
         self._n, self._n0 = n, n0
         self.n_samples = n - n0
-        self._geo = plan.geometry
-        self._u = [np.ascontiguousarray(signals[ch], dtype=float) for ch in plan.names]
-        self._ch, self._lag, self._lmin = plan.ch, plan.lag, plan.lmin
+        self._geometry = plan.geometry
+        self._signals = [np.ascontiguousarray(signals[ch], dtype=float) for ch in plan.names]
+        self._cand_ch, self._cand_lag, self._cand_lmin = plan.ch, plan.lag, plan.lmin
         self._squares: dict[int, np.ndarray] = {}
-        self._keys = np.empty(0, dtype=np.int64)  # tabulated shape keys, sorted
-        self._slots = np.empty(0, dtype=np.intp)  # their rows in the tables
-        self._core = np.empty(0)
-        self._head = np.empty((0, n0 + 1))
-        self._tail = np.empty((0, n0 + 1))
+        self._table_keys = np.empty(0, dtype=np.int64)  # tabulated shape keys, sorted
+        self._table_slots = np.empty(0, dtype=np.intp)  # their rows in the tables
+        self._sums = np.empty(0)
+        self._head_sums = np.empty((0, n0 + 1))
+        self._tail_sums = np.empty((0, n0 + 1))
         # the signals near each end of the window, E[ch, i, rel] = u_ch(lo + i - rel), with
         # one more "channel" of ones for absent factors
-        self._heads, self._tails = self._edges(0), self._edges(n - n0)
-        self._pair: tuple[np.ndarray, np.ndarray] | None = None  # row buffers for Gram columns
+        self._head_edges, self._tail_edges = self._edges(0), self._edges(n - n0)
+        self._gram_rows: tuple[np.ndarray, np.ndarray] | None = None  # rows of a Gram column
         # everything the search needs before its first step, in one planned batch
-        k = len(terms)
-        first = self._apply(plan.first, *plan.rows)
-        self.y_mean, self.y_mean_sq = float(first[0]), float(first[1])
-        self.means, self.target, self.diag = first[2 : 2 + 3 * k].reshape(3, k)
+        first, rows = self._apply(plan.first, *plan.rows), plan.first_rows
+        self.y_mean, self.y_mean_sq = float(first[rows.y_mean]), float(first[rows.y_mean_sq])
+        self.means, self.target, self.diag = first[rows.means], first[rows.target], first[rows.diag]
         self._columns = dict(zip(plan.linear.tolist(),
-                                 first[2 + 3 * k :].reshape(len(plan.linear), k)))
+                                 first[rows.columns].reshape(len(plan.linear), len(terms))))
 
     def column(self, j: int) -> np.ndarray:
         """mean(p_c p_j) for every candidate c."""
         if j in self._columns:
             return self._columns[j]
-        w = self._ch.shape[1]
-        if self._pair is None:
-            pad = np.full((len(self._ch), w), -1, dtype=np.int64)
-            self._pair = np.hstack([self._ch, pad]), np.hstack([self._lag, np.zeros_like(pad)])
-        ch, lag = self._pair
-        ch[:, -w:], lag[:, -w:] = self._ch[j], self._lag[j]
-        batch = plan_batch(self._geo, ch, lag, np.minimum(self._lmin, self._lmin[j]),
-                           self._keys, self._slots)
-        return self._apply(batch, ch, lag, extra=(self._ch[j], self._lag[j]))
+        width = self._cand_ch.shape[1]
+        if self._gram_rows is None:  # every candidate's factors, then room for candidate j's
+            pad = np.full((len(self._cand_ch), width), -1, dtype=np.int64)
+            self._gram_rows = (np.hstack([self._cand_ch, pad]),
+                               np.hstack([self._cand_lag, np.zeros_like(pad)]))
+        ch, lag = self._gram_rows
+        ch[:, -width:], lag[:, -width:] = self._cand_ch[j], self._cand_lag[j]
+        lmin = np.minimum(self._cand_lmin, self._cand_lmin[j])
+        batch = plan_batch(self._geometry, ch, lag, lmin, self._table_keys, self._table_slots)
+        return self._apply(batch, ch, lag, extra=(self._cand_ch[j], self._cand_lag[j]))
 
     # -- moments ---------------------------------------------------------------------------
 
@@ -140,7 +140,7 @@ class LagCorrelations:
             self._add_shapes(batch)
         table, s = batch.table, batch.slot
         lo = batch.lmin[table]
-        tabulated = self._core[s] + self._head[s, self._n0 - lo] - self._tail[s, lo]
+        tabulated = self._sums[s] + self._head_sums[s, self._n0 - lo] - self._tail_sums[s, lo]
         if table.all():
             return tabulated / self.n_samples
         out = np.empty(len(ch))
@@ -156,7 +156,7 @@ class LagCorrelations:
 
     def _factor(self, ch: int, rel: int, lo: int, hi: int) -> np.ndarray:
         """u_ch(t - rel) for t = lo..hi-1, a view (needs lo >= rel)."""
-        return self._u[ch][lo - rel : hi - rel]
+        return self._signals[ch][lo - rel : hi - rel]
 
     def _power(self, ch: int | None, rel: int, k: int, lo: int, hi: int) -> np.ndarray:
         """u_ch(t - rel)^k (k = 1 or 2; squares are computed once) for t = lo..hi-1.
@@ -168,16 +168,16 @@ class LagCorrelations:
         if k == 1:
             return self._factor(ch, rel, lo, hi)
         if ch not in self._squares:
-            self._squares[ch] = np.square(self._u[ch])
+            self._squares[ch] = np.square(self._signals[ch])
         return self._squares[ch][lo - rel : hi - rel]
 
     def _edges(self, lo: int) -> np.ndarray:
         """E[ch, i, rel] = u_ch(lo + i - rel) for i < N0, rel <= N0 (zero before the record
         starts), and a last channel of ones."""
         n0 = self._n0
-        near = np.zeros((len(self._u) + 1, 2 * n0))  # near[ch, m] = u_ch(lo - N0 + m)
+        near = np.zeros((len(self._signals) + 1, 2 * n0))  # near[ch, m] = u_ch(lo - N0 + m)
         skip = max(n0 - lo, 0)
-        for row, u in zip(near, self._u):
+        for row, u in zip(near, self._signals):
             row[skip:] = u[lo - n0 + skip : lo + n0]
         near[-1] = 1.0
         return near[:, _edge_index(n0)]
@@ -206,24 +206,27 @@ class LagCorrelations:
     def _add_shapes(self, batch: Batch) -> None:
         """Tabulate the batch's new shapes: their sum over the window and near each end."""
         n, n0, new = self._n, self._n0, batch.new
-        core = np.empty(len(new.ch))
-        for prefix, g in self._walk(new.groups, n0, n):  # prefix products over the window
+        sums = np.empty(len(new.ch))
+        # the product of each group's leading factors over the window, shared depth-first
+        for prefix, prefix_product in self._walk(new.groups, n0, n):
             for (ch, k), (rows, rels) in new.groups[prefix].items():
-                core[rows] = self._lagged_sums(g, ch, k, rels)
+                sums[rows] = self._lagged_sums(prefix_product, ch, k, rels)
         # near the ends: products of every shape at once, then cumulative sums
-        head = np.zeros((len(core), n0 + 1))  # head[a] = sum_{t=a}^{N0-1}
+        head = np.zeros((len(sums), n0 + 1))  # head[a] = sum_{t=a}^{N0-1}
         head[:, :n0] = np.cumsum(
-            self._heads[new.ch, :, new.rel].prod(axis=1)[:, ::-1], axis=1)[:, ::-1]
-        tail = np.zeros((len(core), n0 + 1))  # tail[b] = sum_{t=N-b}^{N-1}
-        tail[:, 1:] = np.cumsum(self._tails[new.ch, :, new.rel].prod(axis=1)[:, ::-1], axis=1)
-        self._core = np.concatenate([self._core, core])
-        self._head = np.concatenate([self._head, head])
-        self._tail = np.concatenate([self._tail, tail])
-        self._keys, self._slots = batch.keys, batch.slots
+            self._head_edges[new.ch, :, new.rel].prod(axis=1)[:, ::-1], axis=1)[:, ::-1]
+        tail = np.zeros((len(sums), n0 + 1))  # tail[b] = sum_{t=N-b}^{N-1}
+        tail[:, 1:] = np.cumsum(self._tail_edges[new.ch, :, new.rel].prod(axis=1)[:, ::-1], axis=1)
+        self._sums = np.concatenate([self._sums, sums])
+        self._head_sums = np.concatenate([self._head_sums, head])
+        self._tail_sums = np.concatenate([self._tail_sums, tail])
+        self._table_keys, self._table_slots = batch.keys, batch.slots
 
-    def _lagged_sums(self, g: np.ndarray | None, ch: int, k: int, rels: np.ndarray) -> np.ndarray:
-        """``sum_t g(t) u_ch(t - rel)^k`` over the window for each ``rel`` (ascending; ``g``
-        None: ones).
+    def _lagged_sums(
+        self, weight: np.ndarray | None, ch: int, k: int, rels: np.ndarray,
+    ) -> np.ndarray:
+        """``sum_t weight(t) u_ch(t - rel)^k`` over the window for each ``rel`` (ascending;
+        ``weight`` None: ones).  ``weight`` is the product of the moment's other factors.
 
         Several lags of one signal are one correlation (a dot product per lag
         in C) when they fill at least half of their range.
@@ -231,17 +234,17 @@ class LagCorrelations:
         n0, n = self._n0, self._n
         src = None if ch < 0 else ch
         lo, hi = rels[0].item(), rels[-1].item()
-        if g is None and k == 2 and src is not None:  # sums of squares, without forming them
+        if weight is None and k == 2 and src is not None:  # sums of squares, without forming them
             return np.array([f @ f for f in (self._factor(src, r, n0, n) for r in rels.tolist())])
-        if g is None or len(rels) == 1 or hi - lo + 1 > 2 * len(rels):
+        if weight is None or len(rels) == 1 or hi - lo + 1 > 2 * len(rels):
             sums = []
             for r in rels.tolist():
                 f = self._power(src, r, k, n0, n)
-                sums.append(f.sum() if g is None else g @ f)
+                sums.append(f.sum() if weight is None else weight @ f)
             return np.array(sums)
         # u(t - hi)^k for t = n0 .. n - 1 + hi - lo: correlation lag j is rel = hi - j
         series = self._power(src, hi, k, n0, n + hi - lo)
-        return np.correlate(series, g, "valid")[hi - rels]
+        return np.correlate(series, weight, "valid")[hi - rels]
 
     def _product(self, ch: np.ndarray, lag: np.ndarray) -> np.ndarray:
         """The product of the factors (channel, lag) over the window, a new array."""
@@ -258,9 +261,9 @@ class LagCorrelations:
             return self._weighted_gram_sums(ch, lag, weight)
         groups = direct_groups(ch, lag)
         out = np.empty(len(ch))
-        for prefix, g in self._walk(groups, self._n0, self._n, weight):
+        for prefix, prefix_product in self._walk(groups, self._n0, self._n, weight):
             for (c, k), (rows, lags) in groups[prefix].items():
-                out[rows] = self._lagged_sums(g, c, k, lags)
+                out[rows] = self._lagged_sums(prefix_product, c, k, lags)
         return out
 
     def _use_gram(self, ch: np.ndarray, lag: np.ndarray) -> bool:
@@ -275,7 +278,7 @@ class LagCorrelations:
             return False
         if (ch[:, :2] < 0).any():
             return False
-        n_factors = len(np.unique(ch[:, :2] * self._geo.stride + lag[:, :2]))
+        n_factors = len(np.unique(ch[:, :2] * self._geometry.stride + lag[:, :2]))
         return 4 * len(ch) >= n_factors**2
 
     def _weighted_gram_sums(self, ch, lag, weight: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import ClassVar
 
 import numpy as np
 
@@ -176,13 +177,52 @@ def plan_batch(geo: Geometry, ch, lag, lmin, table_keys, table_slots) -> Batch:
 
 
 @dataclass(frozen=True)
+class FirstRows:
+    """Where each quantity sits among the rows of the batch a fit starts with.
+
+    Row 0 is mean(y), row 1 mean(y^2); then ``n_candidates`` rows each of
+    mean(p_c), mean(y p_c) and mean(p_c^2); then the Gram columns mean(p_c p_j)
+    of the ``n_linear`` tabulated linear candidates j, ``n_candidates`` rows each.
+    """
+
+    n_candidates: int
+    n_linear: int
+    y_mean: ClassVar[int] = 0
+    y_mean_sq: ClassVar[int] = 1
+
+    def _block(self, i: int) -> slice:
+        k = self.n_candidates
+        return slice(2 + i * k, 2 + (i + 1) * k)
+
+    @property
+    def means(self) -> slice:
+        return self._block(0)
+
+    @property
+    def target(self) -> slice:
+        return self._block(1)
+
+    @property
+    def diag(self) -> slice:
+        return self._block(2)
+
+    @property
+    def columns(self) -> slice:
+        return slice(self.diag.stop, self.n_rows)
+
+    @property
+    def n_rows(self) -> int:
+        return 2 + (3 + self.n_linear) * self.n_candidates
+
+
+@dataclass(frozen=True)
 class Layout:
     """Everything about a candidate set's correlations that does not depend on the data.
 
     ``ch``, ``lag``: the candidates' factors, one row each (channel index into
     ``names``, -1 for none); ``first``: the plan of the batch a fit starts
-    with, whose rows are ``rows`` (see :func:`layout`); ``linear``: the linear
-    candidates whose Gram columns that batch includes.
+    with, whose rows are ``rows`` (laid out as ``first_rows`` says); ``linear``:
+    the linear candidates whose Gram columns that batch includes.
     """
 
     names: tuple[str, ...]
@@ -192,6 +232,7 @@ class Layout:
     lmin: np.ndarray
     linear: np.ndarray
     rows: tuple[np.ndarray, np.ndarray]
+    first_rows: FirstRows
     first: Batch
 
 
@@ -199,10 +240,13 @@ class Layout:
 def layout(factors: tuple[tuple[Factor, ...], ...], n0: int, table_degree: int) -> Layout:
     """The layout of the candidates with these factors (one tuple per candidate).
 
-    The first batch holds, in order: mean(y), mean(y^2), mean(p_c), mean(y
-    p_c), mean(p_c^2) for every candidate c, then the Gram columns of the
-    linear candidates when they are few (see :func:`_linear_rows`).  Cached:
-    fits of one candidate set share it (its arrays are read-only).
+    The first batch holds, in order (:class:`FirstRows`): mean(y), mean(y^2),
+    mean(p_c), mean(y p_c), mean(p_c^2) for every candidate c, then the Gram
+    columns of the linear candidates when they are few (see
+    :func:`_linear_rows`).  Each row is a product of at most ``2 * width``
+    factors (channel, lag): a candidate's factors in the first half, the
+    second factor of the moment (y, or the candidate again) in the second.
+    Cached: fits of one candidate set share it (its arrays are read-only).
     """
     names = (OUTPUT, *sorted({ch for fs in factors for ch, _ in fs} - {OUTPUT}))
     index = {ch: i for i, ch in enumerate(names)}
@@ -215,20 +259,21 @@ def layout(factors: tuple[tuple[Factor, ...], ...], n0: int, table_degree: int) 
             ch[i, j], lag[i, j] = index[name], lg or 0
     geo = Geometry(n0, len(names), 2 * width, table_degree)
     linear, ch_lin, lag_lin = _linear_rows(ch, lag, table_degree)
-    ch0 = np.full((2 + 3 * k + len(ch_lin), 2 * width), -1, dtype=np.int64)
-    lag0 = np.zeros_like(ch0)
-    ch0[0, 0] = ch0[1, :2] = 0  # y is channel 0 at lag 0
-    for i in range(3):
-        block = slice(2 + i * k, 2 + (i + 1) * k)
-        ch0[block, :width], lag0[block, :width] = ch, lag
-    ch0[2 + k : 2 + 2 * k, width] = 0
-    ch0[2 + 2 * k : 2 + 3 * k, width:], lag0[2 + 2 * k : 2 + 3 * k, width:] = ch, lag
-    ch0[2 + 3 * k :, : width + 1], lag0[2 + 3 * k :, : width + 1] = ch_lin, lag_lin
+    rows = FirstRows(k, len(linear))
+    first_ch = np.full((rows.n_rows, 2 * width), -1, dtype=np.int64)
+    first_lag = np.zeros_like(first_ch)
+    first_ch[rows.y_mean, 0] = first_ch[rows.y_mean_sq, :2] = 0  # y is channel 0 at lag 0
+    for block in (rows.means, rows.target, rows.diag):
+        first_ch[block, :width], first_lag[block, :width] = ch, lag
+    first_ch[rows.target, width] = 0  # times y
+    first_ch[rows.diag, width:], first_lag[rows.diag, width:] = ch, lag  # times itself
+    first_ch[rows.columns, : width + 1] = ch_lin
+    first_lag[rows.columns, : width + 1] = lag_lin
     empty_keys, empty_slots = np.empty(0, dtype=np.int64), np.empty(0, dtype=np.intp)
-    first = plan_batch(geo, ch0, lag0, None, empty_keys, empty_slots)
+    first = plan_batch(geo, first_ch, first_lag, None, empty_keys, empty_slots)
     lmin = np.where(ch >= 0, lag, n0).min(axis=1)
-    out = Layout(names, geo, ch, lag, lmin, linear, (ch0, lag0), first)
-    for a in (ch, lag, lmin, linear, ch0, lag0, *_arrays(first)):
+    out = Layout(names, geo, ch, lag, lmin, linear, (first_ch, first_lag), rows, first)
+    for a in (ch, lag, lmin, linear, first_ch, first_lag, *_arrays(first)):
         a.flags.writeable = False
     return out
 
