@@ -32,7 +32,7 @@ def test_python_blocks_run(page, code, tmp_path, monkeypatch):
 
 
 def _sessions():
-    """The interactive (pycon) blocks of each page, as one session: later blocks use earlier ones."""
+    """The interactive (pycon) blocks of each page as one session (later blocks use earlier)."""
     by_page: dict[str, list[str]] = {}
     for page, block in _blocks("pycon"):
         by_page.setdefault(page, []).append(block)
