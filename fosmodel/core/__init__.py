@@ -1,6 +1,8 @@
-"""The search itself: candidate terms, the Fast Orthogonal Search kernel and its stopping
-rules, the correlation providers (point by point, and Korenberg's fast path with its
-data-free plans), local-level and derived columns, input checks and the package's errors.
+"""The search itself: candidate terms, the FOS kernel and the correlations it runs on.
+
+Candidate terms, the Fast Orthogonal Search kernel and its stopping rules, the correlation
+providers (point by point, and Korenberg's fast path with its data-free plans), local-level
+and derived columns, input checks and the package's errors.
 
 The lowest layer: it imports nothing else of fosmodel.
 """

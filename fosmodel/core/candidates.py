@@ -27,7 +27,7 @@ from itertools import combinations_with_replacement
 import numpy as np
 
 from .exceptions import InputError
-from .levels import is_level, level_name, level_tau
+from .levels import checked_level_tau, is_level, level_name, level_tau
 from .validation import check_int
 
 OUTPUT = "y"
@@ -63,6 +63,7 @@ class Term:
     factors: tuple[Factor, ...] = ()
 
     def __post_init__(self) -> None:
+        """Sort the factors into canonical order, so that equal products compare equal."""
         object.__setattr__(self, "factors", tuple(sorted(self.factors, key=_factor_key)))
 
     @property
@@ -72,10 +73,12 @@ class Term:
 
     @property
     def is_constant(self) -> bool:
+        """Whether the term is the constant (the empty product)."""
         return not self.factors
 
     @cached_property
     def name(self) -> str:
+        """The term's name: ``1``, ``y[n-1]``, ``x[n-2]^2``, ``y[n-1]*temp[n-0]``, a column."""
         if not self.factors:
             return "1"
         parts = []
@@ -90,6 +93,7 @@ class Term:
         return "*".join(parts)
 
     def __str__(self) -> str:
+        """Return the term's :attr:`name`."""
         return self.name
 
     @classmethod
@@ -115,10 +119,11 @@ class Term:
                 if power < 1:
                     raise InputError(f"bad power in term {name!r}")
             lagged = _LAGGED_RE.match(token)
+            factor: Factor
             if level_tau(token) is not None:
                 factor = (token, 0)
             elif lagged:
-                factor: Factor = (lagged.group("ch"), int(lagged.group("lag")))
+                factor = (lagged.group("ch"), int(lagged.group("lag")))
             elif _COLUMN_RE.match(token) and "[" not in token:
                 factor = (token, None)
             else:
@@ -162,6 +167,13 @@ class CandidateSpec:
     product_lags: int | None = None
 
     def __post_init__(self) -> None:
+        """Store the options as plain dict and tuples, and check them.
+
+        Raises
+        ------
+        InputError
+            A lag, degree, product lag or level time constant out of range.
+        """
         object.__setattr__(self, "exog_lags", dict(self.exog_lags or {}))
         object.__setattr__(self, "columns", tuple(self.columns or ()))
         object.__setattr__(self, "levels", _level_taus(self.levels))
@@ -205,7 +217,7 @@ class CandidateSpec:
         return (OUTPUT, *self.level_names, *self.exog_lags, *self.columns)
 
     def base_factors(self) -> list[Factor]:
-        """The degree-1 lagged factors and levels, in canonical order."""
+        """Return the degree-1 lagged factors and levels, in canonical order."""
         out: list[Factor] = [(OUTPUT, lag) for lag in range(1, self.max_lag + 1)]
         out.extend((name, 0) for name in self.level_names)
         for ch in sorted(self.exog_lags):
@@ -213,13 +225,13 @@ class CandidateSpec:
         return out
 
     def product_factors(self) -> list[Factor]:
-        """The factors that enter cross-products of degree 2 and more."""
+        """Return the factors that enter cross-products of degree 2 and more."""
         if self.product_lags is None:
             return self.base_factors()
         return [(OUTPUT, lag) for lag in range(1, min(self.product_lags, self.max_lag) + 1)]
 
 
-def _level_taus(taus: object) -> tuple[float, ...]:
+def _level_taus(taus: Iterable[float] | None) -> tuple[float, ...]:
     """Level time constants as their names round them; positive and distinct."""
     out = []
     for tau in taus or ():
@@ -227,14 +239,14 @@ def _level_taus(taus: object) -> tuple[float, ...]:
                 or not math.isfinite(tau) or tau <= 0:
             raise InputError(f"a level time constant must be a positive number of seconds, "
                              f"got {tau!r}")
-        out.append(level_tau(level_name(tau)))
+        out.append(checked_level_tau(level_name(tau)))
     if len(set(out)) != len(out):
         raise InputError(f"level time constants repeat: {', '.join(map(level_name, out))}")
     return tuple(sorted(out))
 
 
 def count_candidates(spec: CandidateSpec) -> int:
-    """Number of candidates :func:`generate_terms` would produce, without building them.
+    """Count the candidates :func:`generate_terms` would produce, without building them.
 
     With B lagged factors, P of them in cross-products and degree D there are
     ``B + sum_{d=2..D} C(P+d-1, d)`` products (multisets), plus the constant and
@@ -253,8 +265,9 @@ def generate_terms(spec: CandidateSpec) -> list[Term]:
 
 
 @lru_cache(maxsize=32)
-def _generate(max_lag, degree, exog_lags, columns, constant, levels, product_lags
-              ) -> tuple[Term, ...]:
+def _generate(max_lag: int, degree: int, exog_lags: tuple[tuple[str, int], ...],
+              columns: Sequence[str], constant: bool, levels: Sequence[float],
+              product_lags: int | None) -> tuple[Term, ...]:
     spec = CandidateSpec(max_lag, degree, dict(exog_lags), columns, constant, levels,
                          product_lags)
     terms = [Term(())] if constant else []
@@ -266,6 +279,7 @@ def _generate(max_lag, degree, exog_lags, columns, constant, levels, product_lag
 
 
 def term_names(terms: Iterable[Term]) -> list[str]:
+    """Return the names of ``terms``, in order."""
     return [t.name for t in terms]
 
 
@@ -351,7 +365,8 @@ def _check_reach(term: Term, lag: int, start: int) -> None:
         raise InputError(f"term {term.name!r} needs {lag} past samples, only {start} given")
 
 
-def _window(term: Term, signals: Mapping[str, np.ndarray], ch: str, lag, start: int, n: int):
+def _window(term: Term, signals: Mapping[str, np.ndarray], ch: str, lag: int | None,
+            start: int, n: int) -> np.ndarray:
     """``signals[ch][t - lag]`` for ``t = start .. n-1``."""
     lag = lag or 0
     _check_reach(term, lag, start)

@@ -63,10 +63,12 @@ def is_derived(name: str) -> bool:
 
 
 def cosine_name(freq_hz: float) -> str:
+    """``cos@7Hz``: the name of the cosine of frequency ``freq_hz`` over the record's time."""
     return f"cos@{freq_hz:.8g}Hz"
 
 
 def sine_name(freq_hz: float) -> str:
+    """``sin@7Hz``: the name of the sine of frequency ``freq_hz`` over the record's time."""
     return f"sin@{freq_hz:.8g}Hz"
 
 
@@ -74,14 +76,17 @@ TIME_NAME = "t@s"
 
 
 def exp_name(tau_s: float) -> str:
+    """``exp(-t/600s)``: the name of the decay with time constant ``tau_s`` seconds."""
     return f"exp(-t/{tau_s:.6g}s)"
 
 
 def step_name(time_s: float) -> str:
+    """``step@120s``: the name of the unit step at ``time_s`` seconds into the record."""
     return f"step@{time_s:.8g}s"
 
 
 def square_name(channel: str) -> str:
+    """``sq(temp)``: the name of the square of the centred ``channel``."""
     return f"sq({channel})"
 
 
@@ -91,7 +96,7 @@ def fast_name(channel: str, tau_s: float) -> str:
 
 
 def channels_read(names: Iterable[str]) -> list[str]:
-    """The record channels that derived columns among ``names`` read."""
+    """Return the record channels that derived columns among ``names`` read."""
     out = []
     for name in names:
         found = _match(name)
@@ -102,7 +107,7 @@ def channels_read(names: Iterable[str]) -> list[str]:
 
 def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
            offsets: Mapping[str, float]) -> np.ndarray:
-    """The column ``name`` over ``n`` samples at ``rate`` Hz.
+    """Compute the column ``name`` over ``n`` samples at ``rate`` Hz.
 
     Parameters
     ----------

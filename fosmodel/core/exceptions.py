@@ -31,6 +31,14 @@ class NotFittedError(InputError, _SklearnNotFitted):
     """
 
 
+def error_line(exc: BaseException) -> str:
+    """Return the first line of ``exc``'s message, or its type's name if it has none.
+
+    That line is what a one-line :class:`InputError` quotes of a library's error.
+    """
+    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+
+
 class UnstableModelWarning(UserWarning):
     """A fitted linear model has a characteristic root on or outside the unit circle."""
 

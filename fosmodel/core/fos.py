@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import solve_triangular
 
 from .exceptions import InputError
@@ -81,6 +82,14 @@ class StopRule:
     max_terms: int | None = None
 
     def __post_init__(self) -> None:
+        """Check the rule's name, tolerance and cap.
+
+        Raises
+        ------
+        InputError
+            An unknown rule, a tolerance out of (0, 1) where the rule needs one, or a
+            negative or non-integer ``max_terms``.
+        """
         if self.kind not in STOP_RULES:
             raise InputError(
                 f"unknown stop rule {self.kind!r}; choose from {', '.join(STOP_RULES)}")
@@ -95,6 +104,8 @@ class StopRule:
 
     def reached(self, mse: float, mse_null: float, y_mean_sq: float) -> bool:
         """Whether the residual ``mse`` is low enough already (``variance``, ``mean_square``)."""
+        if self.tol is None:  # the rules without a tolerance stop on other grounds
+            return False
         if self.kind == "variance":
             return mse <= self.tol * mse_null
         if self.kind == "mean_square":
@@ -102,9 +113,11 @@ class StopRule:
         return False
 
     def should_stop(self, q: float, mse: float, k: int, n: int) -> bool:
-        """Whether the rule refuses the best next term, whose MSE reduction ``q`` takes the
-        residual from ``mse`` to ``mse - q``, with ``k`` parameters (the constant counted)
-        before it, on ``n`` samples (``korenberg`` and the information criteria)."""
+        """Whether the rule refuses the best next term (``korenberg``, the criteria).
+
+        The term's MSE reduction ``q`` takes the residual from ``mse`` to ``mse - q``,
+        with ``k`` parameters (the constant counted) before it, on ``n`` samples.
+        """
         mse_new = max(mse - q, 0.0)
         if self.kind == "korenberg":
             return q <= 4.0 * mse_new / n
@@ -113,6 +126,7 @@ class StopRule:
         return False
 
     def to_dict(self) -> dict:
+        """Return the rule as a JSON-ready dict of its three fields."""
         return {"kind": self.kind, "tol": self.tol, "max_terms": self.max_terms}
 
 
@@ -193,6 +207,7 @@ class FOSResult:
 
     @property
     def n_terms(self) -> int:
+        """Number of selected terms, the constant not counted."""
         return len(self.support)
 
     @property
@@ -214,6 +229,7 @@ class DataCorrelations:
         self.diag = np.einsum("ij,ij->j", X, X) / n
 
     def column(self, j: int) -> np.ndarray:
+        """Return the mean products of candidate ``j`` with every candidate (Gram column j)."""
         return (self.X.T @ self.X[:, j]) / self.n_samples
 
 
@@ -404,7 +420,7 @@ def center(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return out, mean
 
 
-def _as_finite(a: object, name: str, ndim: int) -> np.ndarray:
+def _as_finite(a: ArrayLike, name: str, ndim: int) -> np.ndarray:
     if np.iscomplexobj(a):
         raise InputError(f"{name} is complex; FOS models real signals")
     arr = np.asarray(a, dtype=float)
@@ -476,8 +492,8 @@ def fos(
     y_off = 0.0
     if fit_intercept:
         X, x_off = center(X)
-        y, y_off = center(y)
-        y_off = float(y_off)
+        y, y_mean = center(y)
+        y_off = float(y_mean)
     if precompute == "auto":
         precompute = X.shape[1] <= 64
     corr = _GramCorrelations.from_data(X, y) if precompute else DataCorrelations(X, y)

@@ -45,9 +45,23 @@ def level_name(tau_s: float) -> str:
 
 
 def level_tau(name: str) -> float | None:
-    """The time constant in seconds of a level name, or None if ``name`` is not one."""
+    """Return the time constant in seconds of a level name, or None if ``name`` is not one."""
     m = _NAME_RE.match(name)
     return float(m.group("tau")) if m else None
+
+
+def checked_level_tau(name: str) -> float:
+    """Return the time constant in seconds of the level ``name``.
+
+    Raises
+    ------
+    InputError
+        ``name`` is not the name of a level.
+    """
+    tau = level_tau(name)
+    if tau is None:
+        raise InputError(f"{name!r} is not the name of a level (level@<seconds>s)")
+    return tau
 
 
 def is_level(channel: str) -> bool:
@@ -55,8 +69,8 @@ def is_level(channel: str) -> bool:
     return channel.startswith(PREFIX)
 
 
-def check_level_rate(taus: Sequence[float], rate: object) -> float | None:
-    """The sample rate levels with time constants ``taus`` (seconds) are computed at.
+def check_level_rate(taus: Sequence[float], rate: float | None) -> float | None:
+    """Return the sample rate levels with time constants ``taus`` (seconds) are computed at.
 
     Raises
     ------
@@ -75,7 +89,7 @@ def check_level_rate(taus: Sequence[float], rate: object) -> float | None:
 
 
 def level_gain(tau_s: float, rate: float) -> float:
-    """``a = 1 / (tau * rate)``, the weight of the newest sample."""
+    """Return ``a = 1 / (tau * rate)``, the weight of the newest sample."""
     return 1.0 / (tau_s * rate)
 
 
@@ -105,7 +119,7 @@ _RECENT: list[tuple[tuple, np.ndarray, np.ndarray]] = []
 
 
 def level_after(y: np.ndarray, tau_s: float, rate: float) -> float:
-    """The level at sample ``N``, just after ``y`` ends: what a free run starts from."""
+    """Return the level at sample ``N``, just after ``y`` ends: what a free run starts from."""
     return smooth_after(y, level_gain(tau_s, rate))
 
 
@@ -121,7 +135,7 @@ def smooth(y: np.ndarray, gain: float) -> np.ndarray:
 
 
 def smooth_after(y: np.ndarray, gain: float) -> float:
-    """The next value of :func:`smooth` after the last sample of ``y``."""
+    """Return the next value of :func:`smooth` after the last sample of ``y``."""
     y = np.asarray(y, dtype=float)
     if len(y) == 0:
         raise InputError("a level needs at least one past sample")
@@ -130,9 +144,10 @@ def smooth_after(y: np.ndarray, gain: float) -> float:
 
 def check_level_series(values: np.ndarray, y: np.ndarray, tau_s: float, rate: float,
                        name: str) -> np.ndarray:
-    """``values`` as a float array if it is ``level_series(y, tau_s, rate)``, checked at its
-    start and at 16 points (to rounding): a cheap guard against the series of another
-    record or time constant.
+    """Return ``values`` as a float array if it is ``level_series(y, tau_s, rate)``.
+
+    It is checked at its start and at 16 points (to rounding): a cheap guard against the
+    series of another record or time constant.
 
     Raises
     ------
@@ -179,12 +194,15 @@ def level_grid(n_samples: int, rate: float, tau_floor_s: float | None = None,
     top = max(top, shortest)
     bottom = max(shortest, top / (30.0 / math.sqrt(3.0)))
     taus = np.geomspace(bottom, top, count) if top > bottom else np.array([top])
-    return tuple(dict.fromkeys(level_tau(level_name(t)) for t in taus))
+    return tuple(dict.fromkeys(checked_level_tau(level_name(t)) for t in taus))
 
 
 def levels_for(y: np.ndarray, rate: float, count: int = 4) -> tuple[float, ...]:
-    """:func:`level_grid` for a record: its length and the floor of its overlapping Allan
-    deviation (allantools), at the shortest ``tau`` where it stops falling."""
+    """Return :func:`level_grid` for a record.
+
+    The grid takes the record's length and the floor of its overlapping Allan deviation
+    (allantools), at the shortest ``tau`` where it stops falling.
+    """
     import allantools  # only here: the grid of a record needs it, the levels do not
 
     n = len(y)
@@ -200,4 +218,5 @@ def with_levels(signals: dict[str, np.ndarray], names: Sequence[str], rate: floa
                 output: str) -> dict[str, np.ndarray]:
     """``signals`` plus the level series ``names`` of its ``output`` channel."""
     y = signals[output]
-    return {**signals, **{name: level_series(y, level_tau(name), rate) for name in names}}
+    return {**signals, **{name: level_series(y, checked_level_tau(name), rate)
+                          for name in names}}

@@ -7,6 +7,7 @@ import math
 from collections.abc import Iterable, Mapping
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .exceptions import InputError, NotFittedError
 
@@ -38,8 +39,8 @@ def check_positive(value: object, name: str) -> float:
     return float(value)
 
 
-def as_signal(values: object, name: str, last: int | None = None) -> np.ndarray:
-    """A finite 1-D float64 array from a numpy array, list or pandas Series.
+def as_signal(values: ArrayLike, name: str, last: int | None = None) -> np.ndarray:
+    """Return a finite 1-D float64 array from a numpy array, list or pandas Series.
 
     ``last`` checks only the last ``last`` samples for NaN/inf: those a free
     run reads of a long past.
@@ -69,9 +70,9 @@ def as_signal(values: object, name: str, last: int | None = None) -> np.ndarray:
 
 
 def as_channels(
-    exog: Mapping[str, object] | None, needed: Iterable[str], length: int
+    exog: Mapping[str, ArrayLike] | None, needed: Iterable[str], length: int
 ) -> dict[str, np.ndarray]:
-    """The channels ``needed`` from a dict or DataFrame, each checked like :func:`as_signal`."""
+    """Return the channels ``needed`` from a dict or DataFrame, checked like :func:`as_signal`."""
     needed = list(needed)
     if not needed:
         return {}
