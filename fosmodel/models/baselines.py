@@ -17,10 +17,11 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Mapping
-from typing import NamedTuple, TypeVar
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 from sklearn.base import BaseEstimator
 from statsmodels.regression.linear_model import burg, yule_walker
 from statsmodels.tsa.ar_model import AutoReg
@@ -114,8 +115,8 @@ def _estimate(method: str, x: np.ndarray, order: int) -> tuple[np.ndarray, float
 # -- shared behaviour --------------------------------------------------------------------
 
 
-def _check_record(y: object, order: int) -> np.ndarray:
-    """The training record as a finite array, long enough and not constant for AR(order)."""
+def _check_record(y: ArrayLike, order: int) -> np.ndarray:
+    """Return the training record as a finite array, long enough and not constant for AR(order)."""
     arr = as_signal(y, "y")
     needed = 2 * order + 2
     if len(arr) < needed:
@@ -130,7 +131,7 @@ def _check_record(y: object, order: int) -> np.ndarray:
 
 
 def _plain(value: object) -> object:
-    """A numpy scalar as the Python scalar, for JSON."""
+    """Return a numpy scalar as the Python scalar, for JSON."""
     return value.item() if isinstance(value, np.generic) else value
 
 
@@ -155,7 +156,7 @@ class _LinearAR(BaseEstimator):
     def _check_fitted(self) -> None:
         check_fitted(self, "coef_")
 
-    def predict(self, y: object) -> np.ndarray | pd.Series:
+    def predict(self, y: ArrayLike) -> np.ndarray | pd.Series:
         """One-step-ahead prediction from the true past, aligned with ``y``.
 
         Sample ``n`` is predicted from ``y[n-1], ..., y[n-p]``; the first ``lag_window_``
@@ -171,7 +172,7 @@ class _LinearAR(BaseEstimator):
             return pd.Series(out, index=y.index, name="prediction")
         return out
 
-    def residuals(self, y: object) -> np.ndarray | pd.Series:
+    def residuals(self, y: ArrayLike) -> np.ndarray | pd.Series:
         """``y`` minus its one-step prediction (NaN over the lag window)."""
         pred = self.predict(y)
         return (y - pred) if isinstance(pred, pd.Series) else as_signal(y, "y") - pred
@@ -190,7 +191,8 @@ class _LinearAR(BaseEstimator):
         roots = self.ar_roots()
         return float(np.max(np.abs(roots))) if len(roots) else 0.0
 
-    def simulate(self, y_init: object, n_steps: int, *, noise: object | None = None) -> np.ndarray:
+    def simulate(self, y_init: ArrayLike, n_steps: int, *,
+                 noise: ArrayLike | None = None) -> np.ndarray:
         """Free run: continue ``y_init`` for ``n_steps`` samples from the model's own output.
 
         Parameters
@@ -253,7 +255,7 @@ class _LinearAR(BaseEstimator):
         }
 
     @classmethod
-    def from_dict(cls: type[_M], data: Mapping[str, object]) -> _M:
+    def from_dict(cls: type[_M], data: Mapping[str, Any]) -> _M:
         """Rebuild a fitted model from :meth:`to_dict` output.
 
         Raises
@@ -345,7 +347,7 @@ class ARModel(_LinearAR):
                 f"; valid: {', '.join(_CONVENTIONS)}"
             )
 
-    def fit(self, y: object) -> ARModel:
+    def fit(self, y: ArrayLike) -> ARModel:
         """Estimate the weights and innovation variance on the record ``y``.
 
         Parameters
@@ -370,7 +372,7 @@ class ARModel(_LinearAR):
         self.method_ = self.method
 
     def summary(self) -> Summary:
-        """Method, order, mean, innovation variance, each weight, stability and largest root."""
+        """Summarise the fit: method, order, mean, innovation variance, weights, stability."""
         self._check_fitted()
         info = [("Method", self.method_), ("Order p", f"{self.order}"), *self._common_info()]
         notes = [
@@ -441,7 +443,7 @@ class GaussMarkovModel(_LinearAR):
                 or not math.isfinite(rate) or rate <= 0):
             raise InputError(f"rate must be a positive number of Hz or None, got {rate!r}")
 
-    def fit(self, y: object) -> GaussMarkovModel:
+    def fit(self, y: ArrayLike) -> GaussMarkovModel:
         """Estimate ``phi``, the driving-noise variance and the time constants on ``y``.
 
         Parameters
@@ -490,7 +492,7 @@ class GaussMarkovModel(_LinearAR):
 def make_baseline(
     method: str, order: int, rate: float | None = None
 ) -> ARModel | GaussMarkovModel:
-    """The baseline for a command-line method code.
+    """Return the baseline for a command-line method code.
 
     Parameters
     ----------

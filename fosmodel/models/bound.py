@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .model import FOSModel
 
@@ -24,24 +25,30 @@ class BoundModel:
 
     @property
     def lag_window_(self) -> int:
+        """Past samples the model reads (see :attr:`FOSModel.lag_window_`)."""
         return self.model.lag_window_
 
     @property
     def n_terms_(self) -> int:
+        """Number of selected terms (see :attr:`FOSModel.n_terms_`)."""
         return self.model.n_terms_
 
     def is_stable(self) -> bool:
+        """Whether the model's linear part is stable (see :meth:`FOSModel.is_stable`)."""
         return self.model.is_stable()
 
     def _cut(self, n: int) -> dict[str, np.ndarray] | None:
         return {k: v[:n] for k, v in self.inputs.items()} if self.inputs else None
 
-    def predict(self, y: object, *, start: int = 0) -> np.ndarray:
-        """One-step prediction of ``y``, the first ``len(y)`` samples of the record (from
-        sample ``start`` on; see :meth:`FOSModel.predict`)."""
+    def predict(self, y: np.ndarray, *, start: int = 0) -> np.ndarray:
+        """Predict ``y``, the first ``len(y)`` samples of the record, one step ahead.
+
+        From sample ``start`` on; see :meth:`FOSModel.predict`.
+        """
         return self.model.predict(y, self._cut(len(y)), start=start)
 
-    def simulate(self, y_init: object, n_steps: int, noise: object | None = None) -> np.ndarray:
+    def simulate(self, y_init: np.ndarray, n_steps: int,
+                 noise: ArrayLike | None = None) -> np.ndarray:
         """Free run after ``y_init`` (the record's first samples) for ``n_steps`` samples.
 
         Without levels only the last ``lag_window_`` samples of the past reach
@@ -53,6 +60,6 @@ class BoundModel:
                   if self.inputs else None)
         return self.model.simulate(np.asarray(y_init)[cut:], n_steps, inputs, noise)
 
-    def free_runs(self, y: object, starts: Sequence[int], n_steps: int) -> np.ndarray:
+    def free_runs(self, y: np.ndarray, starts: Sequence[int], n_steps: int) -> np.ndarray:
         """:meth:`FOSModel.free_runs` on the record's first ``len(y)`` samples."""
         return self.model.free_runs(y, starts, n_steps, self._cut(len(y)))

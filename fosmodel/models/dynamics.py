@@ -11,6 +11,7 @@ import warnings
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
+from numpy.typing import ArrayLike
 from scipy.signal import lfilter, lfiltic
 
 from ..core.exceptions import InputError, UnstableModelWarning
@@ -55,9 +56,9 @@ def is_stable(phi: np.ndarray) -> bool:
 
 
 def free_run_inputs(
-    y_init: object, n_steps: object, noise: object | None, lag_window: int
+    y_init: ArrayLike, n_steps: object, noise: ArrayLike | None, lag_window: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Checked ``(past, drive)`` for a free run of ``n_steps`` samples after ``y_init``.
+    """Return the checked ``(past, drive)`` of a free run of ``n_steps`` samples after ``y_init``.
 
     Raises
     ------

@@ -30,7 +30,8 @@ import numpy as np
 from scipy.signal import oaconvolve
 
 from ..core.candidates import OUTPUT, Term
-from ..core.levels import is_level, level_gain, level_tau
+from ..core.exceptions import InputError
+from ..core.levels import checked_level_tau, is_level, level_gain
 
 _BLOCK = 64  # rows of the response computed one by one; the rest a block at a time
 
@@ -74,6 +75,7 @@ class Expansion:
 
     @property
     def lag_window(self) -> int:
+        """Number of output lags the expansion reads (``L``)."""
         return len(self.phi)
 
     def responses(self, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
@@ -95,11 +97,15 @@ def split_expansion(
 ) -> Expansion:
     """Split a fitted model's terms for its free runs."""
     index = {name: j for j, name in enumerate(level_names)}
-    gains = np.array([level_gain(level_tau(name), rate) for name in level_names])
+    gains = np.zeros(len(level_names))
+    if level_names:
+        if rate is None:
+            raise InputError("a model with levels needs its sample rate (rate=...)")
+        gains[:] = [level_gain(checked_level_tau(name), rate) for name in level_names]
     phi, weights = np.zeros(max_lag), np.zeros(len(level_names))
     drive, nonlinear = [], []
     for term, c in zip(terms, coef):
-        lags = tuple(lag for ch, lag in term.factors if ch == OUTPUT)
+        lags = tuple(lag for ch, lag in term.factors if ch == OUTPUT and lag is not None)
         levels = tuple(index[ch] for ch, _ in term.factors if is_level(ch))
         rest = tuple(f for f in term.factors if f[0] != OUTPUT and not is_level(f[0]))
         if not lags and not levels:
@@ -113,7 +119,8 @@ def split_expansion(
     return Expansion(phi, gains, weights, float(intercept), drive, nonlinear)
 
 
-def _responses(phi, gains, weights, n_steps):
+def _responses(phi: np.ndarray, gains: np.ndarray, weights: np.ndarray,
+               n_steps: int) -> tuple[np.ndarray, np.ndarray]:
     p, j = len(phi), len(gains)
     m = np.zeros((p + j, p + j))
     if p:
@@ -128,9 +135,12 @@ def _responses(phi, gains, weights, n_steps):
 
 def linear_responses(m: np.ndarray, g: np.ndarray, c: np.ndarray,
                      n_steps: int) -> tuple[np.ndarray, np.ndarray]:
-    """``(R, h)`` of the linear recursion ``y[n] = c z[n] + d[n]``, ``z[n+1] = A z[n] + g y[n]``
-    over ``n_steps`` samples, ``m = A`` (``R[k] = c M^k``, ``h[0] = 1``, ``h[k] = c M^(k-1) g``
-    with ``M = A + g c``): a run is ``R z[s] + h * d``."""
+    """Return the responses ``(R, h)`` of a linear recursion over ``n_steps`` samples.
+
+    The recursion is ``y[n] = c z[n] + d[n]``, ``z[n+1] = A z[n] + g y[n]`` with ``m = A``:
+    ``R[k] = c M^k``, ``h[0] = 1``, ``h[k] = c M^(k-1) g`` with ``M = A + g c``, and a run
+    is ``R z[s] + h * d``.
+    """
     m = m + np.outer(g, c)
     r = np.empty((n_steps, len(c)))
     row = np.asarray(c, dtype=float).copy()
@@ -151,8 +161,10 @@ def linear_responses(m: np.ndarray, g: np.ndarray, c: np.ndarray,
 
 
 def superpose(r: np.ndarray, h: np.ndarray, state: np.ndarray, drive: np.ndarray) -> np.ndarray:
-    """Linear runs from the states (K, D) with the drives (K, H): ``R z + h * d``, NaN in a
-    row from its first non-finite sample."""
+    """Run linearly from the states (K, D) with the drives (K, H): ``R z + h * d``.
+
+    A row is NaN from its first non-finite sample on.
+    """
     n_steps = drive.shape[1]
     with np.errstate(over="ignore", invalid="ignore"):
         out = state @ r[:n_steps].T
@@ -235,13 +247,15 @@ def run_many(ex: Expansion, past: np.ndarray, levels: np.ndarray, drive: np.ndar
     return out
 
 
-def _superposition(ex, hist, levels, drive):
+def _superposition(ex: Expansion, hist: np.ndarray, levels: np.ndarray,
+                   drive: np.ndarray) -> np.ndarray:
     """Linear runs: ``R z[s]`` plus the drive convolved with ``h``."""
     r, h = ex.responses(drive.shape[1])
     return superpose(r, h, np.hstack([hist[:, ::-1], levels]), drive)
 
 
-def _recursion(ex, hist, levels, drive, rests):
+def _recursion(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.ndarray,
+               rests: Sequence[np.ndarray | None]) -> np.ndarray:
     """Nonlinear runs: the recursion of :func:`run_one`, one sample of every run at a time.
 
     Each step is a few array operations whatever the number of terms: the

@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.exceptions import InputError
 from ..core.levels import check_level_rate, level_gain, level_series, smooth_after
@@ -49,21 +50,27 @@ class LocalLevelAR:
 
     @property
     def lag_window_(self) -> int:
+        """Past samples the model reads: the base estimator's."""
         return self.base.lag_window_
 
     @property
     def n_terms_(self) -> int:
+        """Number of fitted weights: the base estimator's and the level's."""
         return self.base.n_terms_ + 1
 
     def is_stable(self) -> bool:
+        """Whether the base estimator's AR part is stable."""
         return self.base.is_stable()
 
     def _level(self, y: np.ndarray) -> np.ndarray:
         return level_series(y, self.tau_s, self.rate)
 
-    def fit(self, y: object) -> LocalLevelAR:
-        """Fit the base estimator to ``y`` minus its level (from the second sample on: the
-        level starts at ``y[0]``, so the first deviation is zero by construction)."""
+    def fit(self, y: ArrayLike) -> LocalLevelAR:
+        """Fit the base estimator to ``y`` minus its level.
+
+        From the second sample on: the level starts at ``y[0]``, so the first deviation is
+        zero by construction.
+        """
         arr = as_signal(y, "y")
         if len(arr) < 2:
             raise InputError("record too short for a level: fewer than 2 samples")
@@ -71,13 +78,13 @@ class LocalLevelAR:
         self._responses.clear()
         return self
 
-    def predict(self, y: object) -> np.ndarray:
+    def predict(self, y: ArrayLike) -> np.ndarray:
         """One-step prediction from the true past (NaN over the lag window)."""
         arr = as_signal(y, "y")
         level = self._level(arr)
         return level + self.base.predict(arr - level)
 
-    def simulate(self, y_init: object, n_steps: int) -> np.ndarray:
+    def simulate(self, y_init: ArrayLike, n_steps: int) -> np.ndarray:
         """Free run after ``y_init``: the level follows the model's own output."""
         past = as_signal(y_init, "y_init")
         p = self.lag_window_
@@ -87,7 +94,7 @@ class LocalLevelAR:
         state = self._state(past, np.r_[level, smooth_after(past, self._gain())], len(past))
         return self._run(state[None, :], n_steps)[0]
 
-    def free_runs(self, y: object, starts: Sequence[int], n_steps: int) -> np.ndarray:
+    def free_runs(self, y: ArrayLike, starts: Sequence[int], n_steps: int) -> np.ndarray:
         """``simulate(y[:s], n_steps)`` for each ``s`` in ``starts``, all at once."""
         arr = as_signal(y, "y")
         level = np.r_[self._level(arr), smooth_after(arr, self._gain())]
@@ -111,8 +118,10 @@ class LocalLevelAR:
         return superpose(r, h, states, drive)
 
     def _system(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(A, g, c)`` of :func:`fosmodel.models.freerun.linear_responses` for the state
-        ``[y[n-1] .. y[n-p], level[n] .. level[n-p]]``."""
+        """Return ``(A, g, c)`` of :func:`~fosmodel.models.freerun.linear_responses`.
+
+        The state is ``[y[n-1] .. y[n-p], level[n] .. level[n-p]]``.
+        """
         phi, a, p = self.base.coef_, self._gain(), self.lag_window_
         size = 2 * p + 1
         shift = np.zeros((size, size))

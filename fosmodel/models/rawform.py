@@ -33,7 +33,7 @@ def expand_centred(
     terms: Sequence[Term], coef: Sequence[float], intercept: float,
     offsets: Mapping[str, float],
 ) -> dict[Term, float]:
-    """The weights of the raw monomials of a centred expansion.
+    """Return the weights of the raw monomials of a centred expansion.
 
     Parameters
     ----------

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 
@@ -59,12 +60,12 @@ class FOSRegressor(RegressorMixin, BaseEstimator):
         self.fit_intercept = fit_intercept
         self.dependence_tol = dependence_tol
 
-    def fit(self, X, y) -> FOSRegressor:
+    def fit(self, X: ArrayLike, y: ArrayLike) -> FOSRegressor:
         """Select terms among the columns of ``X`` and fit their weights."""
-        X, y = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
-        res = fos(X, y, max_terms=self.max_terms, stop=self.stop, tol=self.tol,
+        X_checked, y_checked = validate_data(self, X, y, y_numeric=True, dtype=np.float64)
+        res = fos(X_checked, y_checked, max_terms=self.max_terms, stop=self.stop, tol=self.tol,
                   fit_intercept=self.fit_intercept, dependence_tol=self.dependence_tol)
-        self.coef_ = np.zeros(X.shape[1])
+        self.coef_ = np.zeros(X_checked.shape[1])
         self.coef_[res.support] = res.coef
         self.intercept_ = res.intercept
         self.support_ = res.support
@@ -73,8 +74,8 @@ class FOSRegressor(RegressorMixin, BaseEstimator):
         self.stop_reason_ = res.stop_reason
         return self
 
-    def predict(self, X) -> np.ndarray:
+    def predict(self, X: ArrayLike) -> np.ndarray:
         """Linear prediction ``X @ coef_ + intercept_``."""
         check_is_fitted(self)
-        X = validate_data(self, X, reset=False, dtype=np.float64)
-        return X @ self.coef_ + self.intercept_
+        X_checked = validate_data(self, X, reset=False, dtype=np.float64)
+        return X_checked @ self.coef_ + self.intercept_
