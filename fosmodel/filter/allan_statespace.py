@@ -37,6 +37,7 @@ from collections.abc import Mapping
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import block_diag
 
 from ..core.exceptions import InputError
@@ -68,7 +69,7 @@ class TermValue(NamedTuple):
 
 
 def model_terms(fit: NoiseFit) -> dict[str, TermValue]:
-    """The value of each fitted term that :func:`allan_state_space` uses, and its source.
+    """Return the value of each fitted term that :func:`allan_state_space` uses, and its source.
 
     :meth:`~fosmodel.noise.allan.NoiseFit.conservative`: a resolved term gives its fitted
     coefficient, one that is not resolved its upper limit: the conservative choice for a filter,
@@ -93,7 +94,7 @@ def model_terms(fit: NoiseFit) -> dict[str, TermValue]:
     return out
 
 
-def gauss_markov_adev(taus: object, sigma: float, tc: float) -> np.ndarray:
+def gauss_markov_adev(taus: ArrayLike, sigma: float, tc: float) -> np.ndarray:
     """Allan deviation of a first-order Gauss-Markov process (continuous time).
 
     ``sigma^2(tau) = (2 sigma^2 Tc / tau) (1 - Tc (3 - 4 exp(-tau/Tc) + exp(-2 tau/Tc)) /
@@ -125,15 +126,17 @@ def gauss_markov_adev(taus: object, sigma: float, tc: float) -> np.ndarray:
 
 
 def flicker_tau(n: float, k: float, taus: np.ndarray) -> float:
-    """Where a flicker floor matters most: the minimum of ``N^2/tau + K^2 tau/3``,
-    ``sqrt(3) N / K``, within ``taus`` (the floor is not seen beyond the record; without
-    ``K`` that is the longest tau, without ``N`` the shortest)."""
+    """Return the tau where a flicker floor matters most, within ``taus``.
+
+    That is the minimum of ``N^2/tau + K^2 tau/3``, ``sqrt(3) N / K`` (the floor is not seen
+    beyond the record; without ``K`` that is the longest tau, without ``N`` the shortest).
+    """
     tau = math.sqrt(3.0) * n / k if k > 0 else math.inf
     return float(np.clip(tau, taus[0], taus[-1]))
 
 
 def gauss_markov_for_flicker(b: float, tau_b: float) -> tuple[float, float]:
-    """The first-order Gauss-Markov bias standing in for a bias instability ``B``.
+    """Return the first-order Gauss-Markov bias standing in for a bias instability ``B``.
 
     Its Allan deviation peak (:data:`GM_PEAK_ADEV` ``sigma`` at :data:`GM_PEAK_TAU` ``Tc``)
     is put on the flicker floor ``0.664 B`` at ``tau_b``: ``sigma = 0.664 B / 0.6174`` and
@@ -160,7 +163,7 @@ def gauss_markov_for_flicker(b: float, tau_b: float) -> tuple[float, float]:
 
 
 def allan_state_space(fit: NoiseFit, mu: float = 0.0) -> StateSpace:
-    """The white + Gauss-Markov + random-walk error model of one axis from its Allan fit.
+    """Build the white + Gauss-Markov + random-walk error model of one axis from its Allan fit.
 
     The terms' values come from :func:`model_terms` (fitted, or the upper limit where not
     resolved).  ``N`` gives the white state, ``B`` the Gauss-Markov bias of
@@ -215,7 +218,7 @@ def allan_state_space(fit: NoiseFit, mu: float = 0.0) -> StateSpace:
                       state_names=tuple(STATE_NAMES[k] for k in values), input_names=())
 
 
-def model_adev(error: StateSpace, taus: object, rate: float) -> np.ndarray:
+def model_adev(error: StateSpace, taus: ArrayLike, rate: float) -> np.ndarray:
     """Allan deviation of a one-axis :func:`allan_state_space` model, read from its matrices.
 
     Each state is read back from its diagonal entries: ``Phi`` 0 is white noise
@@ -262,8 +265,9 @@ def model_adev(error: StateSpace, taus: object, rate: float) -> np.ndarray:
 
 
 def assemble_axes(axes: Mapping[str, StateSpace]) -> StateSpace:
-    """Several axes' error models as one block-diagonal model (e.g. three gyros, three
-    accelerometers).
+    """Join several axes' error models into one block-diagonal model.
+
+    E.g. three gyros and three accelerometers.
 
     The axes are independent: ``Phi``, ``G``, ``Q``, ``B`` and ``H`` are block-diagonal, so
     output ``i`` (row ``i`` of ``H``) is axis ``i``'s and ``Q`` holds each axis's driving noise
@@ -349,7 +353,7 @@ def initial_covariance(error: StateSpace, n_samples: int) -> np.ndarray:
 
 
 def _subsystem(error: StateSpace, keep: np.ndarray, gqg: np.ndarray) -> StateSpace:
-    """The states ``keep`` of ``error`` on their own, driven by their block of ``G Q G'``."""
+    """Return the states ``keep`` of ``error`` on their own, driven by their block of ``G Q G'``."""
     n = int(keep.sum())
     return StateSpace(Phi=error.Phi[np.ix_(keep, keep)], B=np.zeros((n, 0)), G=np.eye(n),
                       H=np.ones((1, n)), Q=gqg[np.ix_(keep, keep)], mu=0.0,

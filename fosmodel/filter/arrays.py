@@ -70,7 +70,7 @@ CORR_Q5 = np.array([
 
 
 def correlation(n: int, corr: float | np.ndarray) -> np.ndarray:
-    """An ``n x n`` correlation matrix: equicorrelated for a scalar ``rho`` (eq. 6.36) or given.
+    """Return an ``n x n`` correlation matrix: equicorrelated for a scalar ``rho`` or given.
 
     Raises
     ------
@@ -221,15 +221,18 @@ class ArrayModel:
         return block_diag(self.sigma_omega**2, self.cov_w)
 
     def kalman_filter(self) -> KalmanFilter:
-        """:class:`~fosmodel.filter.kalman.KalmanFilter` with ``Phi = I``, ``G = Ts I``
-        (eqs. 6.7-6.9), starting from a zero estimate known exactly (biases zero at power-on)."""
+        """Return the array's :class:`~fosmodel.filter.kalman.KalmanFilter`.
+
+        It has ``Phi = I``, ``G = Ts I`` (eqs. 6.7-6.9) and starts from a zero estimate known
+        exactly (biases zero at power-on).
+        """
         n = self.n_gyros + 1
         return KalmanFilter(np.eye(n), self.ts * np.eye(n), self.Q, self.H, self.cov_v,
                             np.zeros(n), np.zeros((n, n)))
 
 
 def steady_state_gain(model: ArrayModel) -> np.ndarray:
-    """The gain ``K`` the recursive filter converges to, from the discrete Riccati equation.
+    """Return the gain ``K`` the recursive filter converges to, from the Riccati equation.
 
     The model is not detectable (section 6.2): ``u = [1, -1, ..., -1]`` (rate up, every bias
     down) is invisible in ``z`` and is a random walk, so the covariance grows without bound
@@ -260,12 +263,22 @@ def steady_state_gain(model: ArrayModel) -> np.ndarray:
 
 
 def recursive_gain(model: ArrayModel, n_steps: int) -> np.ndarray:
-    """The gain after ``n_steps`` predict/update cycles of the Kalman filter (eqs. 8.3-8.6)."""
+    """Return the gain after ``n_steps`` predict/update cycles of the Kalman filter.
+
+    Eqs. 8.3-8.6.
+
+    Raises
+    ------
+    InputError
+        ``n_steps`` below 1: no update, so no gain.
+    """
     kf = model.kalman_filter()
     z = np.zeros(model.n_gyros)
     for _ in range(n_steps):
         kf.predict()
         kf.update(z)
+    if kf.K is None:
+        raise InputError(f"n_steps must be at least 1, got {n_steps}")
     return kf.K
 
 

@@ -14,12 +14,13 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.exceptions import InputError
 from .statespace import StateSpace
 
 
-def _matrix(value: object, shape: tuple[int, int], name: str) -> np.ndarray:
+def _matrix(value: ArrayLike, shape: tuple[int, int], name: str) -> np.ndarray:
     arr = np.atleast_2d(np.asarray(value, dtype=float))
     if arr.shape != shape or not np.isfinite(arr).all():
         raise InputError(f"{name} must be a finite {shape[0]} x {shape[1]} matrix, "
@@ -57,8 +58,8 @@ class KalmanFilter:
         Gain of the last update.
     """
 
-    def __init__(self, Phi: object, G: object, Q: object, H: object, R: object, x0: object,
-                 P0: object, B: object | None = None) -> None:
+    def __init__(self, Phi: ArrayLike, G: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike,
+                 x0: ArrayLike, P0: ArrayLike, B: ArrayLike | None = None) -> None:
         n = np.atleast_2d(Phi).shape[0]
         self.Phi = _matrix(Phi, (n, n), "Phi")
         self.G = _matrix(G, (n, np.atleast_2d(G).shape[1]), "G")
@@ -72,13 +73,15 @@ class KalmanFilter:
         self._eye = np.eye(n)
 
     @classmethod
-    def from_state_space(cls, system: StateSpace, R: object, x0: object,
-                         P0: object) -> KalmanFilter:
-        """The filter of a :class:`~fosmodel.filter.statespace.StateSpace` measured through
-        its ``H``."""
+    def from_state_space(cls, system: StateSpace, R: ArrayLike, x0: ArrayLike,
+                         P0: ArrayLike) -> KalmanFilter:
+        """Build the filter of a :class:`~fosmodel.filter.statespace.StateSpace`.
+
+        The state is measured through the system's ``H``.
+        """
         return cls(system.Phi, system.G, system.Q, system.H, R, x0, P0, system.B)
 
-    def predict(self, u: object | None = None) -> None:
+    def predict(self, u: ArrayLike | None = None) -> None:
         """Propagate to the next sample: ``x = Phi x + B u``, ``P = Phi P Phi' + G Q G'``."""
         self.x = self.Phi @ self.x
         if self.B.shape[1]:
@@ -87,14 +90,14 @@ class KalmanFilter:
             self.x += self.B @ np.asarray(u, dtype=float)
         self.P = self.Phi @ self.P @ self.Phi.T + self.GQG
 
-    def update(self, z: object) -> None:
+    def update(self, z: ArrayLike) -> None:
         """Correct the estimate with the measurement ``z`` (Joseph form)."""
-        z = np.atleast_1d(np.asarray(z, dtype=float))
+        measured = np.atleast_1d(np.asarray(z, dtype=float))
         ph = self.P @ self.H.T
         s = self.H @ ph + self.R
         # a scalar measurement (the usual case) divides; a vector one solves
         self.K = ph / s[0, 0] if s.shape == (1, 1) else np.linalg.solve(s, ph.T).T
-        self.x = self.x + self.K @ (z - self.H @ self.x)
+        self.x = self.x + self.K @ (measured - self.H @ self.x)
         a = self._eye - self.K @ self.H
         self.P = a @ self.P @ a.T + self.K @ self.R @ self.K.T
 
@@ -108,7 +111,7 @@ class FilterRun(NamedTuple):
     """ndarray of shape (N, n): the diagonals of their covariances."""
 
 
-def run_filter(kf: KalmanFilter, z: object, inputs: object | None = None) -> FilterRun:
+def run_filter(kf: KalmanFilter, z: ArrayLike, inputs: ArrayLike | None = None) -> FilterRun:
     """Predict each sample, and update where a measurement is given.
 
     Parameters
@@ -124,7 +127,8 @@ def run_filter(kf: KalmanFilter, z: object, inputs: object | None = None) -> Fil
     -------
     FilterRun
     """
-    zs = np.asarray(z, dtype=float).reshape(len(z), -1)
+    zs = np.asarray(z, dtype=float)
+    zs = zs.reshape(len(zs), -1)
     us = None if inputs is None else np.asarray(inputs, dtype=float)
     xs = np.empty((len(zs), len(kf.x)))
     var = np.empty_like(xs)

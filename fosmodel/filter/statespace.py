@@ -31,15 +31,17 @@ and inputs, the transition ``f(x, u)`` and its analytic Jacobian.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import solve_discrete_lyapunov
 
 from ..core.candidates import OUTPUT, Term
 from ..core.exceptions import InputError
-from ..core.levels import level_gain, level_tau, smooth_after
+from ..core.levels import checked_level_tau, level_gain, smooth_after
 from ..core.validation import as_channels, as_signal, check_fitted
 from ..models.baselines import ARModel, GaussMarkovModel
 from ..models.model import FOSModel
@@ -48,7 +50,7 @@ CONSTANT = "1"
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class _ShapingFilter:
+class _ShapingFilter(ABC):
     """What the linear and the nonlinear shaping filters share: state, output and noise."""
 
     G: np.ndarray
@@ -69,7 +71,7 @@ class _ShapingFilter:
         """``m``, the length of the input vector ``u``."""
         return len(self.input_names)
 
-    def _inputs(self, u: object) -> np.ndarray:
+    def _inputs(self, u: ArrayLike | None) -> np.ndarray:
         if u is None and self.n_inputs == 0:
             return np.zeros(0)
         arr = np.asarray(u if u is not None else [], dtype=float).ravel()
@@ -78,16 +80,18 @@ class _ShapingFilter:
                              f"{', '.join(self.input_names) or '(none)'}; got {arr.size} value(s)")
         return arr
 
-    def _state(self, x: object) -> np.ndarray:
+    def _state(self, x: ArrayLike) -> np.ndarray:
         arr = np.asarray(x, dtype=float).ravel()
         if arr.shape != (self.n_states,):
             raise InputError(f"the state has {self.n_states} entries "
                              f"({', '.join(self.state_names)}); got {arr.size}")
         return arr
 
-    def _drive(self, w: object | None) -> np.ndarray:
-        """``G w`` for a driving noise ``w`` of ``r`` entries (a scalar when ``r`` is 1);
-        zero when ``w`` is None."""
+    def _drive(self, w: ArrayLike | None) -> np.ndarray:
+        """Return ``G w`` for a driving noise ``w`` of ``r`` entries (a scalar when ``r`` is 1).
+
+        Zero when ``w`` is None.
+        """
         if w is None:
             return np.zeros(self.n_states)
         arr = np.asarray(w, dtype=float).ravel()
@@ -95,8 +99,13 @@ class _ShapingFilter:
             raise InputError(f"the driving noise has {self.G.shape[1]} entries; got {arr.size}")
         return self.G @ arr
 
-    def predict_measurement(self, x: object) -> float:
-        """The modelled output ``H x + mu`` of the state ``x`` (the first output's)."""
+    @abstractmethod
+    def step(self, x: ArrayLike, u: ArrayLike | None = None,
+             w: ArrayLike | None = None) -> np.ndarray:
+        """Return the next state from ``x`` with the inputs ``u`` and the driving noise ``w``."""
+
+    def predict_measurement(self, x: ArrayLike) -> float:
+        """Return the modelled output ``H x + mu`` of the state ``x`` (the first output's)."""
         return float(self.H[0] @ self._state(x)) + self.mu
 
     @property
@@ -104,9 +113,11 @@ class _ShapingFilter:
         """States that hold past outputs (the others are levels)."""
         return self.n_states - len(self.level_gains)
 
-    def state_from(self, y_past: object) -> np.ndarray:
-        """The state at the last sample of ``y_past``: its last ``n_lags`` samples, centred,
-        and the levels after it (the exponentially weighted means of all of it).
+    def state_from(self, y_past: ArrayLike) -> np.ndarray:
+        """Return the state at the last sample of ``y_past``.
+
+        That is its last ``n_lags`` samples, centred, and the levels after it (the
+        exponentially weighted means of all of it).
 
         Raises
         ------
@@ -120,8 +131,8 @@ class _ShapingFilter:
         levels = [smooth_after(arr - self.mu, a) for a in self.level_gains]
         return np.r_[arr[::-1][:p] - self.mu, levels]
 
-    def input_matrix(self, exog: Mapping[str, object] | None, n_samples: int) -> np.ndarray:
-        """Inputs ``u[n]`` for ``n = 0 .. n_samples-1`` from the channels of a record.
+    def input_matrix(self, exog: Mapping[str, ArrayLike] | None, n_samples: int) -> np.ndarray:
+        """Return the inputs ``u[n]`` for ``n = 0 .. n_samples-1`` from a record's channels.
 
         Parameters
         ----------
@@ -145,8 +156,8 @@ class _ShapingFilter:
         return out
 
     def simulate(
-        self, n_steps: int, x0: object | None = None, inputs: object | None = None,
-        noise: object | None = None,
+        self, n_steps: int, x0: ArrayLike | None = None, inputs: ArrayLike | None = None,
+        noise: ArrayLike | None = None,
     ) -> np.ndarray:
         """Run the filter for ``n_steps`` samples after the state ``x0``.
 
@@ -180,7 +191,7 @@ class _ShapingFilter:
             out[k] = self.H[0] @ x
         return out + self.mu
 
-    def _noise(self, noise: object) -> np.ndarray:
+    def _noise(self, noise: ArrayLike) -> np.ndarray:
         """Driving noise as rows of ``r`` entries: a signal when ``r`` is 1, else a matrix."""
         r = self.G.shape[1]
         if r == 1:
@@ -226,9 +237,13 @@ class StateSpace(_ShapingFilter):
     Phi: np.ndarray
     B: np.ndarray
 
-    def step(self, x: object, u: object | None = None, w: object | None = None) -> np.ndarray:
-        """The next state ``Phi x + B u + G w`` (``u`` may be omitted without inputs; ``w``
-        has one entry per column of ``G``, zero by default)."""
+    def step(self, x: ArrayLike, u: ArrayLike | None = None,
+             w: ArrayLike | None = None) -> np.ndarray:
+        """Return the next state ``Phi x + B u + G w``.
+
+        ``u`` may be omitted without inputs; ``w`` has one entry per column of ``G``, zero
+        by default.
+        """
         return self.Phi @ self._state(x) + self.B @ self._inputs(u) + self._drive(w)
 
     def stationary_covariance(self) -> np.ndarray:
@@ -279,18 +294,18 @@ class NonlinearStateSpace(_ShapingFilter):
     term_names: tuple[str, ...]
     input_offsets: np.ndarray
 
-    def _z(self, x: object, u: object) -> tuple[np.ndarray, np.ndarray]:
-        x = self._state(x)
-        return x, np.r_[x, self._inputs(u) - self.input_offsets]
+    def _z(self, x: ArrayLike, u: ArrayLike | None) -> tuple[np.ndarray, np.ndarray]:
+        state = self._state(x)
+        return state, np.r_[state, self._inputs(u) - self.input_offsets]
 
-    def f(self, x: object, u: object | None = None) -> np.ndarray:
-        """The noise-free next state."""
-        x, z = self._z(x, u)
+    def f(self, x: ArrayLike, u: ArrayLike | None = None) -> np.ndarray:
+        """Return the noise-free next state."""
+        state, z = self._z(x, u)
         value = sum(c * np.prod(z[list(idx)]) for c, idx in zip(self.coef, self.factors))
         p, a = self.n_lags, self.level_gains
-        return np.r_[value, x[: p - 1], (1.0 - a) * x[p:] + a * value]
+        return np.r_[value, state[: p - 1], (1.0 - a) * state[p:] + a * value]
 
-    def jacobian(self, x: object, u: object | None = None) -> np.ndarray:
+    def jacobian(self, x: ArrayLike, u: ArrayLike | None = None) -> np.ndarray:
         """``df/dx`` at ``(x, u)``: product rule on each term, then the shift and the levels."""
         _, z = self._z(x, u)
         n, p = self.n_states, self.n_lags
@@ -303,8 +318,9 @@ class NonlinearStateSpace(_ShapingFilter):
         _level_rows(jac, p, self.level_gains)
         return jac
 
-    def step(self, x: object, u: object | None = None, w: object | None = None) -> np.ndarray:
-        """The next state ``f(x, u) + G w`` (``w`` zero by default)."""
+    def step(self, x: ArrayLike, u: ArrayLike | None = None,
+             w: ArrayLike | None = None) -> np.ndarray:
+        """Return the next state ``f(x, u) + G w`` (``w`` zero by default)."""
         return self.f(x, u) + self._drive(w)
 
     def to_dict(self) -> dict:
@@ -334,7 +350,8 @@ class _Expansion:
 
     @property
     def n_lags(self) -> int:
-        lags = [lag for _, t in self.terms for ch, lag in t.factors if ch == OUTPUT]
+        lags = [lag for _, t in self.terms for ch, lag in t.factors
+                if ch == OUTPUT and lag is not None]
         return max(lags, default=1)
 
     @property
@@ -342,9 +359,9 @@ class _Expansion:
         return self.n_lags + len(self.levels)
 
     def state_index(self, factor: tuple[str, int | None]) -> int | None:
-        """The state a factor reads (None for an input)."""
+        """Return the state a factor reads (None for an input)."""
         ch, lag = factor
-        if ch == OUTPUT:
+        if ch == OUTPUT and lag is not None:
             return lag - 1
         names = [name for name, _ in self.levels]
         return self.n_lags + names.index(ch) if ch in names else None
@@ -362,7 +379,7 @@ class _Expansion:
 
 
 def _expansion(model: object) -> _Expansion:
-    """The expansion of a fitted AR, Gauss-Markov or FOS model; InputError otherwise."""
+    """Return the expansion of a fitted AR, Gauss-Markov or FOS model; InputError otherwise."""
     if isinstance(model, (ARModel, GaussMarkovModel)):
         check_fitted(model, "coef_")
         terms = tuple((float(c), Term(((OUTPUT, k),))) for k, c in enumerate(model.coef_, 1))
@@ -371,9 +388,14 @@ def _expansion(model: object) -> _Expansion:
         check_fitted(model, "terms_")
         q = float(model.mse_path_[-1]) if len(model.mse_path_) else float(model.mse_null_)
         terms = tuple((float(c), Term.parse(n)) for n, c in zip(model.terms_, model.coef_))
-        levels = tuple((name, level_gain(level_tau(name), model.rate))
-                       for name in model.spec_.level_names
-                       if any(f[0] == name for _, t in terms for f in t.factors))
+        used = [name for name in model.spec_.level_names
+                if any(f[0] == name for _, t in terms for f in t.factors)]
+        levels: tuple[tuple[str, float], ...] = ()
+        if used:
+            rate = model.rate
+            if rate is None:
+                raise InputError("a model with levels needs its sample rate (rate=...)")
+            levels = tuple((name, level_gain(checked_level_tau(name), rate)) for name in used)
         return _Expansion(model.offsets_[OUTPUT], q, float(model.intercept_), terms,
                           dict(model.offsets_), levels)
     raise InputError(f"cannot export a {type(model).__name__}: a state space is built from a "
@@ -393,8 +415,10 @@ def _output_matrices(ex: _Expansion) -> dict:
 
 
 def _level_rows(matrix: np.ndarray, p: int, gains: np.ndarray) -> None:
-    """Fill the level rows of a transition (or input) matrix whose first row is the output's:
-    ``(1 - a)`` on the level itself plus ``a`` times the output row."""
+    """Fill the level rows of a transition (or input) matrix whose first row is the output's.
+
+    A level's row is ``(1 - a)`` on the level itself plus ``a`` times the output row.
+    """
     for j, a in enumerate(gains):
         row = a * matrix[0]
         if matrix.shape[0] == matrix.shape[1]:
@@ -403,7 +427,7 @@ def _level_rows(matrix: np.ndarray, p: int, gains: np.ndarray) -> None:
 
 
 def to_state_space(model: ARModel | GaussMarkovModel | FOSModel) -> StateSpace:
-    """The linear companion-form shaping filter of a fitted model.
+    """Build the linear companion-form shaping filter of a fitted model.
 
     Parameters
     ----------
@@ -450,7 +474,7 @@ def to_state_space(model: ARModel | GaussMarkovModel | FOSModel) -> StateSpace:
 def to_nonlinear_state_space(
     model: ARModel | GaussMarkovModel | FOSModel,
 ) -> NonlinearStateSpace:
-    """The shaping filter ``f(x, u)`` of any fitted model, for an extended Kalman filter.
+    """Build the shaping filter ``f(x, u)`` of any fitted model, for an extended Kalman filter.
 
     Parameters
     ----------
@@ -485,7 +509,7 @@ def to_nonlinear_state_space(
 
 
 def position_velocity_error_model(error: StateSpace, dt: float) -> StateSpace:
-    """A 1-D position / velocity error state driven by an accelerometer error model.
+    """Build a 1-D position / velocity error state driven by an accelerometer error model.
 
     Seed 000, eq. 5.7: ``dp[k] = dp[k-1] + dt dv[k-1]``, ``dv[k] = dv[k-1] + dt da[k-1]``
     with ``da = H_e x_e`` the error model's output deviation (its mean ``mu`` is taken as

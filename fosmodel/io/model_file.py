@@ -28,7 +28,7 @@ def write_model(path: str | os.PathLike[str], model: FOSModel,
 
 
 def read_model(path: str | os.PathLike[str]) -> FOSModel:
-    """The model saved in ``path``, checked down to its numbers and the column it names.
+    """Load the model saved in ``path``, checked down to its numbers and the column it names.
 
     Raises
     ------

@@ -18,7 +18,7 @@ def mpu6050_static_path() -> Path:
 
 
 def load_mpu6050_static() -> Record:
-    """The bundled MPU-6050 static recording: accelerations in g, rates in deg/s, 100 Hz.
+    """Load the bundled MPU-6050 static recording: accelerations in g, rates in deg/s, 100 Hz.
 
     Returns
     -------

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pywt
+from numpy.typing import ArrayLike
 from scipy.signal import filtfilt, firwin, kaiserord
 
 from ..core.exceptions import InputError
@@ -31,7 +32,7 @@ def wavelet_band_hz(rate: float, levels: int) -> float:
     return check_positive(rate, "rate") / 2 ** (check_int(levels, "levels", 1) + 1)
 
 
-def wavelet_lowpass(y: object, levels: int = 4, wavelet: str = "db4") -> np.ndarray:
+def wavelet_lowpass(y: ArrayLike, levels: int = 4, wavelet: str = "db4") -> np.ndarray:
     """Wavelet low pass: keep only the level-``levels`` approximation of a multilevel DWT.
 
     ``pywt.wavedec`` decomposes ``y``, every detail coefficient is set to zero and
@@ -83,7 +84,7 @@ def wavelet_lowpass(y: object, levels: int = 4, wavelet: str = "db4") -> np.ndar
 
 
 def kaiser_lowpass(
-    y: object,
+    y: ArrayLike,
     rate: float,
     cutoff_hz: float = 8.0,
     transition_hz: float = 2.0,
@@ -149,7 +150,7 @@ def kaiser_lowpass(
     return filtfilt(taps, [1.0], arr, padlen=min(3 * numtaps, len(arr) - 1))
 
 
-def denoise(y: object, rate: float | None, method: str | None) -> np.ndarray:
+def denoise(y: ArrayLike, rate: float | None, method: str | None) -> np.ndarray:
     """Denoise ``y`` by name, with the defaults of the papers.
 
     Parameters
