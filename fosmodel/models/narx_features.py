@@ -21,7 +21,7 @@ a model is tuned over the lags, the degree and the number of terms with
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from numbers import Integral
 
 import numpy as np
@@ -155,7 +155,7 @@ class NARXFeatures(TransformerMixin, BaseEstimator):
         """
         X = validate_data(self, X, dtype=np.float64)
         given = {factor: j for j, factor in enumerate(self._factors_in())}
-        lags = _newest_to_oldest(given)
+        lags = _lags_by_channel(given)
         exog_lags = self.exog_lags if self.exog_lags is not None else {
             ch: lags[ch][-1] for ch in lags if ch != OUTPUT}
         max_lag = self.max_lag if self.max_lag is not None else max(lags.get(OUTPUT, [0]))
@@ -171,7 +171,7 @@ class NARXFeatures(TransformerMixin, BaseEstimator):
         self._columns = given
         self._terms = generate_terms(spec)
         self.offsets_ = {ch: float(X[:, given[(ch, lag[0])]].mean()) if self.center else 0.0
-                         for ch, lag in _newest_to_oldest(spec.base_factors()).items()}
+                         for ch, lag in _lags_by_channel(spec.base_factors()).items()}
         return self
 
     def _factors_in(self) -> list[tuple[str, int]]:
@@ -229,8 +229,8 @@ def _lagged_factor(name: str) -> tuple[str, int]:
     return factors[0]
 
 
-def _newest_to_oldest(factors) -> dict[str, list[int]]:
-    """The lags of each channel among ``factors``, sorted."""
+def _lags_by_channel(factors: Iterable[tuple[str, int]]) -> dict[str, list[int]]:
+    """The lags of each channel among ``factors``, smallest (newest) first."""
     lags: dict[str, list[int]] = {}
     for ch, lag in factors:
         lags.setdefault(ch, []).append(lag)
