@@ -42,7 +42,7 @@ WORKER_ENV = {"OMP_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1, "MKL_NUM_THREADS"
 
 
 def connect(address: str, timeout: float = 10.0) -> Client:
-    """A client of the Dask scheduler at ``address`` (e.g. ``tcp://10.0.0.5:8786``).
+    """Connect a client to the Dask scheduler at ``address`` (e.g. ``tcp://10.0.0.5:8786``).
 
     Raises
     ------
@@ -58,7 +58,7 @@ def connect(address: str, timeout: float = 10.0) -> Client:
 
 @contextlib.contextmanager
 def local_client(n_workers: int) -> Iterator[Client]:
-    """A client of a new local cluster of ``n_workers`` single-threaded processes.
+    """Start a local cluster of ``n_workers`` single-threaded processes; yield its client.
 
     The cluster is closed on exit.
     """
@@ -87,7 +87,7 @@ def _quiet() -> Iterator[None]:
 def run_tasks(
     plans: Sequence[StudyPlan], client: Client, *, progress: bool = False
 ) -> list[list[FitScore]]:
-    """Every task of every plan on ``client``'s cluster, submitted together.
+    """Run every task of every plan on ``client``'s cluster, submitted together.
 
     Parameters
     ----------

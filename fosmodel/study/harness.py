@@ -43,13 +43,14 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from ..core.blas import one_blas_thread
 from ..core.exceptions import InputError, UnstableModelWarning
 from ..core.levels import levels_for
 from ..core.validation import as_signal
 from ..io.split import Split
-from ..models.baselines import METHOD_LABELS, make_baseline
+from ..models.baselines import METHOD_LABELS, ARModel, GaussMarkovModel, make_baseline
 from ..models.levelar import LocalLevelAR
 from ..models.model import FOSModel
 from ..noise.denoise import DENOISERS, denoise
@@ -104,6 +105,14 @@ class StudyConfig:
     levels: bool = True
 
     def __post_init__(self) -> None:
+        """Store the sequences as tuples and check every option.
+
+        Raises
+        ------
+        InputError
+            A rate, sensor, units, method, protocol, denoiser, order, degree, horizon or
+            number of starts out of range.
+        """
         for name in ("orders", "degrees", "methods", "protocols", "taus"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         if not (np.isfinite(self.rate) and self.rate > 0):
@@ -119,9 +128,11 @@ class StudyConfig:
             raise InputError("the outage horizon must be positive and n_starts at least 1")
 
     def configurations(self, protocol: str = "fair") -> list[tuple[str, int, int]]:
-        """Every (method, order, degree) to fit under ``protocol``: FOS at each degree, AR at
-        degree 1, GM once; with ``levels``, under the fair protocol, each again about the
-        local level (method ``<method>+level``)."""
+        """List every (method, order, degree) to fit under ``protocol``.
+
+        FOS at each degree, AR at degree 1, GM once; with ``levels``, under the fair
+        protocol, each again about the local level (method ``<method>+level``).
+        """
         out = []
         level_too = self.levels and protocol == "fair"
         for method in self.methods:
@@ -135,7 +146,7 @@ class StudyConfig:
         return out
 
     def denoiser(self, protocol: str, method: str) -> str | None:
-        """The denoiser a method's data go through under a protocol (None: raw data)."""
+        """Return the denoiser a method's data go through under a protocol (None: raw data)."""
         return (self.paper_denoise if protocol == "paper" and not method.startswith("fos")
                 else None)
 
@@ -149,11 +160,17 @@ def _check_choices(what: str, given: Sequence[str], valid: Sequence[str]) -> Non
 
 
 def make_model(method: str, order: int, degree: int, config: StudyConfig,
-               level_taus: Sequence[float] = (), level_tau: float | None = None):
-    """A fresh, unfitted model of one configuration.
+               level_taus: Sequence[float] = (), level_tau: float | None = None,
+               ) -> FOSModel | ARModel | GaussMarkovModel | LocalLevelAR:
+    """Make a fresh, unfitted model of one configuration.
 
     ``fos+level`` is offered the levels ``level_taus``; a baseline about the level
     (``burg+level``, ...) uses the one level ``level_tau``.
+
+    Raises
+    ------
+    InputError
+        A baseline about the level without its ``level_tau``.
     """
     base, about_level = method.removesuffix(LEVEL), method.endswith(LEVEL)
     if base == "fos":
@@ -161,7 +178,11 @@ def make_model(method: str, order: int, degree: int, config: StudyConfig,
                         levels=list(level_taus) if about_level else None,
                         rate=config.rate if about_level else None)
     model = make_baseline(base, order, rate=config.rate)
-    return LocalLevelAR(model, level_tau, config.rate) if about_level else model
+    if not about_level:
+        return model
+    if level_tau is None:
+        raise InputError(f"{method} needs the time constant of its level (level_tau=...)")
+    return LocalLevelAR(model, level_tau, config.rate)
 
 
 def method_label(method: str, degree: int) -> str:
@@ -197,14 +218,17 @@ class StudyResult:
     level_taus: tuple[float, ...] = ()
 
     def best(self) -> pd.DataFrame:
-        """Per protocol and method (FOS per degree), the row with the lowest evaluation MSE
-        (over the orders and, about the level, the level's time constants)."""
+        """Return the row with the lowest evaluation MSE per protocol and method.
+
+        FOS per degree; the minimum is over the orders and, about the level, the level's
+        time constants.
+        """
         idx = self.rows.groupby(["protocol", "method", "degree"], sort=False)["evaluate_mse"]
         return self.rows.loc[idx.idxmin()].reset_index(drop=True)
 
     def to_json_dict(self) -> dict:
         """Rows and best rows with the keys of ``fosmodel study --json``."""
-        def records(frame):
+        def records(frame: pd.DataFrame) -> list[dict]:
             out = []
             for rec in frame.to_dict(orient="records"):
                 rec = {k: _json_value(v) for k, v in rec.items()}
@@ -281,22 +305,25 @@ class StudyPlan:
     level_taus: tuple[float, ...] = ()
 
     def __reduce__(self) -> tuple:
+        """Pickle the plan so that it unpickles through :func:`_unpickle_plan`."""
         return _unpickle_plan, (self.config, self.split, self.signals, self.tasks,
                                 self.level_taus)
 
 
-def _unpickle_plan(config, split, signals, tasks, level_taus=()) -> StudyPlan:
-    """A plan with its own copy of the signals.
+def _unpickle_plan(config: StudyConfig, split: Split,
+                   signals: dict[str | None, tuple[np.ndarray, np.ndarray]],
+                   tasks: tuple[FitTask, ...], level_taus: tuple[float, ...] = ()) -> StudyPlan:
+    """Rebuild a plan with its own copy of the signals.
 
     Unpickled arrays may lie at any byte offset of a received buffer (Dask's
     frames), and numpy sums arrays that are not 8-byte aligned in another
     order: the results would differ from this process's in the last bit.
     """
-    signals = {d: tuple(np.array(a) for a in pair) for d, pair in signals.items()}
-    return StudyPlan(config, split, signals, tasks, level_taus)
+    copies = {d: (np.array(fit), np.array(score)) for d, (fit, score) in signals.items()}
+    return StudyPlan(config, split, copies, tasks, level_taus)
 
 
-def plan_study(y: object, config: StudyConfig) -> StudyPlan:
+def plan_study(y: ArrayLike, config: StudyConfig) -> StudyPlan:
     """Check and split the record ``y``, denoise it as the protocols need, list the fits.
 
     Raises
@@ -318,8 +345,10 @@ def plan_study(y: object, config: StudyConfig) -> StudyPlan:
 
 
 def _row_tasks(config: StudyConfig, level_taus: Sequence[float]) -> list[tuple[str, FitTask]]:
-    """(protocol, task) of every row of the study, in row order: a baseline about the level
-    once per level time constant."""
+    """Return the (protocol, task) of every row of the study, in row order.
+
+    A baseline about the level has one row per level time constant.
+    """
     out = []
     for protocol in config.protocols:
         for method, order, degree in config.configurations(protocol):
@@ -342,7 +371,7 @@ def run_task(plan: StudyPlan, task: FitTask) -> FitScore:
 
 
 def assemble(plan: StudyPlan, scores: Sequence[FitScore]) -> StudyResult:
-    """The study result from the scores of ``plan.tasks``, in the same order."""
+    """Assemble the study result from the scores of ``plan.tasks``, in the same order."""
     if len(scores) != len(plan.tasks):
         raise ValueError(f"{len(scores)} scores for {len(plan.tasks)} tasks")
     scored = dict(zip(plan.tasks, scores))
@@ -356,15 +385,17 @@ def assemble(plan: StudyPlan, scores: Sequence[FitScore]) -> StudyResult:
     return StudyResult(pd.DataFrame(rows), plan.config, plan.split, notes, plan.level_taus)
 
 
-def _signals(y, split, denoiser, rate) -> tuple[np.ndarray, np.ndarray]:
-    """(samples to fit on, samples to score against) for one kind of data."""
+def _signals(y: np.ndarray, split: Split, denoiser: str | None,
+             rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return (samples to fit on, samples to score against) for one kind of data."""
     train = y[split.train]
     if denoiser is None:
         return train, y
     return denoise(train, rate, denoiser), denoise(y, rate, denoiser)
 
 
-def _score(task: FitTask, fit_signal, score_signal, split, config, level_taus) -> FitScore:
+def _score(task: FitTask, fit_signal: np.ndarray, score_signal: np.ndarray, split: Split,
+           config: StudyConfig, level_taus: Sequence[float]) -> FitScore:
     model = make_model(task.method, task.order, task.degree, config, level_taus,
                        task.level_tau)
     t0 = time.perf_counter()
@@ -377,7 +408,7 @@ def _score(task: FitTask, fit_signal, score_signal, split, config, level_taus) -
     pred = model.predict(score_signal)
     residual = (score_signal - pred)[split.predict]
     mse = one_step_mse(score_signal, pred, split.predict)
-    row = {
+    row: dict[str, object] = {
         "evaluate_mse": one_step_mse(score_signal, pred, split.evaluate),
         "mse": mse,
         "position_error_m": equivalent_position_error(mse, config.sensor, config.units),

@@ -13,14 +13,19 @@ from __future__ import annotations
 import contextlib
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
+from numpy.typing import ArrayLike
 from tqdm import tqdm
 
 from .harness import FitScore, StudyConfig, StudyPlan, StudyResult, assemble, plan_study, run_task
 
+if TYPE_CHECKING:  # only for the annotations: Dask is an optional extra
+    from distributed import Client
+
 
 def run_studies(
-    plans: Sequence[StudyPlan], *, client: object = None, progress: bool = False
+    plans: Sequence[StudyPlan], *, client: Client | None = None, progress: bool = False
 ) -> list[StudyResult]:
     """Run every task of several studies, here one by one or all at once on a Dask cluster.
 
@@ -50,7 +55,7 @@ def run_studies(
 def _run_here(plans: Sequence[StudyPlan], progress: bool) -> list[list[FitScore]]:
     bar = tqdm(total=sum(len(plan.tasks) for plan in plans), disable=not progress,
                file=sys.stderr, desc="study", unit="fit")
-    scores = []
+    scores: list[list[FitScore]] = []
     with bar:
         for plan in plans:
             scores.append([])
@@ -61,7 +66,7 @@ def _run_here(plans: Sequence[StudyPlan], progress: bool) -> list[list[FitScore]
 
 
 def run_study(
-    y: object, config: StudyConfig, *, progress: bool = False, client: object = None
+    y: ArrayLike, config: StudyConfig, *, progress: bool = False, client: Client | None = None
 ) -> StudyResult:
     """Fit, select and score every configuration of ``config`` on the record ``y``.
 
@@ -84,9 +89,10 @@ def run_study(
 
 def dask_client(scheduler: str | None = None, workers: int | None = None,
                 timeout: float = 10.0) -> contextlib.AbstractContextManager:
-    """A context giving the Dask client for :func:`run_studies`: of the scheduler at the address
-    ``scheduler``, or of a local cluster of ``workers`` single-threaded processes; None (run in
-    this process) with neither.
+    """Return a context giving the Dask client for :func:`run_studies`.
+
+    The client is of the scheduler at the address ``scheduler``, or of a local cluster of
+    ``workers`` single-threaded processes; None (run in this process) with neither.
 
     Raises
     ------

@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 import statsmodels.api as sm
 from numpy.polynomial import Polynomial
+from numpy.typing import ArrayLike
 
 from ..core.candidates import OUTPUT, Term, evaluate_terms
 from ..core.exceptions import InputError
@@ -70,7 +71,7 @@ def _fill_gaps(mask: np.ndarray, width: int) -> np.ndarray:
 
 
 def temperature_segments(
-    temp: object,
+    temp: ArrayLike,
     rate: float,
     *,
     smooth_s: float = 10.0,
@@ -128,12 +129,23 @@ def temperature_segments(
 
 
 def _design(
-    model: FOSModel, y: np.ndarray, exog: Mapping[str, object] | None, runs: Sequence[slice]
+    model: FOSModel, y: np.ndarray, exog: Mapping[str, ArrayLike] | None, runs: Sequence[slice]
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Selected terms of a fitted model (centred as in the fit) and the centred output."""
+    """Return the selected terms of a fitted model (centred as in the fit) and the centred output.
+
+    Raises
+    ------
+    InputError
+        The model reads a channel that ``exog`` lacks.
+    """
     signals = {OUTPUT: y - model.offsets_[OUTPUT]}
-    for ch in [*model.spec_.exog_lags, *model.spec_.columns]:
-        signals[ch] = as_signal(exog[ch], ch) - model.offsets_[ch]
+    given: Mapping[str, ArrayLike] = exog if exog is not None else {}
+    channels = [*model.spec_.exog_lags, *model.spec_.columns]
+    missing = [ch for ch in channels if ch not in given]
+    if missing:
+        raise InputError(f"the model reads {', '.join(missing)}; pass them in exog")
+    for ch in channels:
+        signals[ch] = as_signal(given[ch], ch) - model.offsets_[ch]
     terms = [Term.parse(name) for name in model.terms_]
     n0 = model.lag_window_
     pieces = [{k: v[s] for k, v in signals.items()} for s in runs if s.stop - s.start > n0]
@@ -144,8 +156,8 @@ def _design(
 
 def term_standard_errors(
     model: FOSModel,
-    y: object,
-    exog: Mapping[str, object] | None = None,
+    y: ArrayLike,
+    exog: Mapping[str, ArrayLike] | None = None,
     segments: Sequence[slice] | None = None,
 ) -> pd.DataFrame:
     """Coefficients of a fitted FOS model's terms with least-squares standard errors.
@@ -175,7 +187,7 @@ def term_standard_errors(
 
 
 def segment_table(
-    y: object, temp: object, segments: Sequence[slice], order: int = 1
+    y: ArrayLike, temp: ArrayLike, segments: Sequence[slice], order: int = 1
 ) -> pd.DataFrame:
     """Error model per plateau: bias, noise level and AR(``order``) coefficients with SEs.
 
@@ -214,7 +226,7 @@ def segment_table(
 
 
 def segment_noise(
-    y: object, rate: float, segments: Sequence[slice], sensor: str, units: str
+    y: ArrayLike, rate: float, segments: Sequence[slice], sensor: str, units: str
 ) -> pd.DataFrame:
     """Allan white-noise coefficient per plateau in navigation units (seed 001 Table 1).
 
@@ -227,7 +239,10 @@ def segment_noise(
     rows = []
     for s in segments:
         fit = fit_noise(allan_deviation(y[s], rate, units=units, sensor=sensor))
-        value, label = fit.navigation("N")
+        navigation = fit.navigation("N")
+        if navigation is None:  # the fit was given the sensor and units, so never here
+            raise InputError(f"no navigation units for a {sensor} in {units}")
+        value, label = navigation
         scale = value / fit.coefficients["N"] if fit.coefficients["N"] > 0 else np.nan
         rows.append({"noise": value, "noise_se": fit.stderr["N"] * scale, "noise_units": label})
     return pd.DataFrame(rows)
@@ -255,7 +270,7 @@ class TableModel:
         Polynomial degree in temperature.
     """
 
-    def __init__(self, table: pd.DataFrame, temp: object, degree: int = 2) -> None:
+    def __init__(self, table: pd.DataFrame, temp: ArrayLike, degree: int = 2) -> None:
         self.temp = as_signal(temp, "temperature")
         deg = min(degree, len(table) - 1)
         t = table["temp_c"].to_numpy()
@@ -269,7 +284,7 @@ class TableModel:
         """Bias and AR weights (one row per lag) at the temperatures ``t``."""
         return self.bias(t), np.array([a(t) for a in self.weights]).reshape(-1, len(t))
 
-    def predict(self, y: object) -> np.ndarray:
+    def predict(self, y: ArrayLike) -> np.ndarray:
         """One-step prediction of ``y`` (the record's first ``len(y)`` samples)."""
         y = as_signal(y, "y")
         b, a = self._coefficients(self.temp[: len(y)])
@@ -280,7 +295,7 @@ class TableModel:
         out[: self.lag_window_] = np.nan
         return out
 
-    def simulate(self, y_init: object, n_steps: int) -> np.ndarray:
+    def simulate(self, y_init: ArrayLike, n_steps: int) -> np.ndarray:
         """Free run after ``y_init`` (the record's first samples) for ``n_steps`` samples."""
         y0 = as_signal(y_init, "y_init")
         start, p = len(y0), self.lag_window_
@@ -299,9 +314,9 @@ def _wls_poly(t: np.ndarray, values: pd.Series, se: pd.Series, degree: int) -> P
 
 
 def concatenate_plateaus(
-    y: object, temp: object, segments: Sequence[slice]
+    y: ArrayLike, temp: ArrayLike, segments: Sequence[slice]
 ) -> tuple[np.ndarray, np.ndarray, list[slice]]:
-    """The plateaus of ``y`` and ``temp`` back to back, and the slices of each in the result.
+    """Join the plateaus of ``y`` and ``temp`` back to back; return them and their slices.
 
     Passed as ``segments`` to :meth:`FOSModel.fit`, the slices keep every lag inside its own
     plateau.
@@ -314,7 +329,7 @@ def concatenate_plateaus(
 
 
 def global_models(
-    y: object, temp: object, segments: Sequence[slice], max_lag: int = 2, temp_lags: int = 1,
+    y: ArrayLike, temp: ArrayLike, segments: Sequence[slice], max_lag: int = 2, temp_lags: int = 1,
 ) -> dict[str, FOSModel]:
     """FOS models fitted across the plateaus ``segments``, with and without temperature.
 
@@ -337,15 +352,15 @@ def global_models(
             "fos": FOSModel(max_lag=max_lag).fit(yy, segments=runs)}
 
 
-def temperature_inputs(temp: object) -> dict[str, np.ndarray]:
-    """The inputs of a ``"fos_temp"`` model: ``temp_c`` and its square ``temp_c_sq``."""
+def temperature_inputs(temp: ArrayLike) -> dict[str, np.ndarray]:
+    """Return the inputs of a ``"fos_temp"`` model: ``temp_c`` and its square ``temp_c_sq``."""
     t = as_signal(temp, "temperature")
     return {TEMP: t, TEMP_SQ: t**2}
 
 
 def held_out_comparison(
-    y: object,
-    temp: object,
+    y: ArrayLike,
+    temp: ArrayLike,
     rate: float,
     segments: Sequence[slice],
     *,
@@ -383,14 +398,16 @@ def held_out_comparison(
         train = [s for j, s in enumerate(segments) if j != k]
         scored = slice(max(held.start, first), held.stop)
         fos = global_models(y, temp, train, max_lag, temp_lags)
-        models = {"table": TableModel(segment_table(y, temp, train, order), temp, degree),
-                  "fos_temp": BoundModel(fos["fos_temp"], temperature_inputs(temp)),
-                  "fos": BoundModel(fos["fos"], {})}
+        models: dict[str, TableModel | BoundModel] = {
+            "table": TableModel(segment_table(y, temp, train, order), temp, degree),
+            "fos_temp": BoundModel(fos["fos_temp"], temperature_inputs(temp)),
+            "fos": BoundModel(fos["fos"], {})}
         for name, model in models.items():
             pred = model.predict(y)
             out = outage_metrics(model, y, rate, sensor, units, scored, horizon_s, n_starts,
                                  residual=(y - pred)[scored])
-            terms = ", ".join(model.model.terms_) if name != "table" else f"AR({order}) table"
+            terms = (f"AR({order}) table" if isinstance(model, TableModel)
+                     else ", ".join(model.model.terms_))
             rows.append({"held_out": k, "temp_c": float(np.mean(temp[held])), "model": name,
                          "mse": one_step_mse(y, pred, scored),
                          "outage_mse": out["outage_mse"],
