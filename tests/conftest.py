@@ -84,3 +84,95 @@ def spiky_csv(tmp_path: Path) -> Callable[..., tuple[Path, np.ndarray, np.ndarra
         return tmp_path / "s.csv", a, b
 
     return write
+
+
+
+def _header(types, stamp_ns: int, seq: int):
+    """A std_msgs/msg/Header stamped ``stamp_ns`` (ROS 1's with its sequence number)."""
+    header = types["std_msgs/msg/Header"]
+    stamp = types["builtin_interfaces/msg/Time"](sec=stamp_ns // 10**9, nanosec=stamp_ns % 10**9)
+    numbered = {"seq": seq} if "seq" in header.__dataclass_fields__ else {}
+    return header(**numbered, stamp=stamp, frame_id="imu_link")
+
+
+def _imu_message(types, header, columns: dict[str, np.ndarray], k: int,
+                 unmeasured: tuple[str, ...]):
+    """Sample ``k`` of ``columns`` as a sensor_msgs/msg/Imu (no orientation, as a raw IMU)."""
+    vector = types["geometry_msgs/msg/Vector3"]
+
+    def covariance(name):
+        return np.r_[-1.0 if name in unmeasured else 0.01, np.zeros(8)]
+
+    return types["sensor_msgs/msg/Imu"](
+        header=header, orientation=types["geometry_msgs/msg/Quaternion"](0.0, 0.0, 0.0, 1.0),
+        orientation_covariance=np.r_[-1.0, np.zeros(8)],
+        angular_velocity=vector(*(columns[c][k] for c in ("gx", "gy", "gz"))),
+        angular_velocity_covariance=covariance("angular_velocity"),
+        linear_acceleration=vector(*(columns[c][k] for c in ("ax", "ay", "az"))),
+        linear_acceleration_covariance=covariance("linear_acceleration"))
+
+
+@pytest.fixture
+def imu_bag(tmp_path: Path) -> Callable[..., tuple[Path, dict[str, dict[str, np.ndarray]]]]:
+    """A writer of ROS bags in the test's ``tmp_path``, with rosbags' writers, from known arrays.
+
+    ``imu_bag(name, storage, imu={"/imu0": 400}, temperature={}, rate=200.0, zero_stamps=False,
+    unmeasured=(), gap_after=None)`` writes a ROS 1 bag (storage ``"ros1"``) or a ROS 2 bag
+    directory (``"sqlite3"``, ``"mcap"``) of ``sensor_msgs/msg/Imu`` topics of so many
+    messages at ``rate`` and ``sensor_msgs/msg/Temperature`` topics at 10 Hz; ``zero_stamps``
+    leaves the headers unstamped, ``unmeasured`` names vectors whose covariance[0] is -1, and
+    ``gap_after`` delays the IMU messages after that one by 4 sample intervals.  The bag
+    records each message 2 ms after its stamp.  It returns the bag and, per topic, the arrays
+    written: ``stamp`` (ns, the header's), ``log_time`` (ns, when the bag recorded it) and
+    the columns (``gx``.. or ``temperature``).
+    """
+    from rosbags.rosbag1 import Writer as Writer1
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2 import Writer as Writer2
+    from rosbags.typesys import Stores, get_typestore
+
+    def write(name: str, storage: str = "sqlite3", imu: dict[str, int] | None = None,
+              temperature: dict[str, int] | None = None, rate: float = 200.0,
+              zero_stamps: bool = False, unmeasured: tuple[str, ...] = (),
+              gap_after: int | None = None):
+        typestore = get_typestore(Stores.ROS1_NOETIC if storage == "ros1" else Stores.ROS2_HUMBLE)
+        types, start = typestore.types, 1_700_000_000 * 10**9 + 123_456_789
+        arrays, messages = {}, []  # messages: (log time, topic, type, message)
+        for i, (topic, n) in enumerate(({"/imu0": 400} if imu is None else imu).items()):
+            rng = np.random.default_rng(i)
+            columns = {c: 0.01 * rng.standard_normal(n) for c in ("gx", "gy", "gz")}
+            columns |= {c: mean + 0.05 * rng.standard_normal(n)
+                        for c, mean in (("ax", 0.1), ("ay", -0.2), ("az", 9.81))}
+            stamps = start + np.round(np.arange(n) * 1e9 / rate).astype(np.int64)
+            if gap_after is not None:
+                stamps[gap_after + 1:] += np.int64(round(4e9 / rate))
+            arrays[topic] = {"stamp": stamps, "log_time": stamps + 2_000_000, **columns}
+            messages += [(int(stamps[k]) + 2_000_000, topic, "sensor_msgs/msg/Imu", _imu_message(
+                types, _header(types, 0 if zero_stamps else int(stamps[k]), k), columns, k,
+                unmeasured)) for k in range(n)]
+        for topic, n in (temperature or {}).items():
+            stamps = start - 50_000_000 + np.arange(n, dtype=np.int64) * 100_000_000
+            values = 25.0 + 0.01 * np.arange(n) ** 1.5
+            arrays[topic] = {"stamp": stamps, "log_time": stamps + 2_000_000,
+                             "temperature": values}
+            messages += [(int(stamps[k]) + 2_000_000, topic, "sensor_msgs/msg/Temperature",
+                          types["sensor_msgs/msg/Temperature"](
+                              header=_header(types, 0 if zero_stamps else int(stamps[k]), k),
+                              temperature=float(values[k]), variance=0.0)) for k in range(n)]
+        path = tmp_path / name
+        if storage == "ros1":
+            writer, serialize = Writer1(path), typestore.serialize_ros1
+        else:
+            plugin = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}[storage]
+            writer = Writer2(path, version=9, storage_plugin=plugin)
+            serialize = typestore.serialize_cdr
+        with writer:
+            connections = {}
+            for log_time, topic, msgtype, message in sorted(messages, key=lambda m: m[0]):
+                if topic not in connections:
+                    connections[topic] = writer.add_connection(topic, msgtype,
+                                                               typestore=typestore)
+                writer.write(connections[topic], log_time, serialize(message, msgtype))
+        return path, arrays
+
+    return write

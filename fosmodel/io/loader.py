@@ -1,4 +1,4 @@
-"""Load and validate a sensor record from CSV, ``.npy`` or Parquet.
+"""Load and validate a sensor record from CSV, ``.npy``, Parquet, a ROS bag or a PX4 ULog.
 
 This is the one place where files are read and checked.  Every problem is an
 :class:`~fosmodel.core.exceptions.InputError` naming the file, the column and the
@@ -19,6 +19,9 @@ CSV
     column ``c0``) or a 2-D array (columns ``c0``, ``c1``, ...).
 Parquet
     Read with pandas when pyarrow is installed.
+ROS bags, PX4 ULog
+    One IMU topic (``topic``), read by :mod:`fosmodel.io.topics` into columns
+    and a time column that go through the same checks (rows are messages).
 
 Checks and repairs
 ------------------
@@ -40,16 +43,18 @@ import lzma
 import os
 import re
 import warnings
-from collections.abc import Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 
-from ..core.exceptions import InputError
+from ..core.exceptions import InputError, error_line
 from ..core.validation import did_you_mean
+from .record import Record
+from .sensor_log import SensorLog
+from .topics import FORMATS, TopicError, is_sensor_log, read_topic
 
 TIME_COLUMNS = ("time", "time_s", "t_s")
 OUTLIER_MODES = ("keep", "clip", "drop")
@@ -78,70 +83,6 @@ _RATE_RANGE = (1e-6, 1e9)
 CHUNK_ROWS = 500_000
 
 
-@dataclass
-class Record:
-    """A validated record: equally long, finite float columns and their sample rate.
-
-    Attributes
-    ----------
-    source : str
-        File it came from.
-    data : dict of str to ndarray
-        Numeric columns in file order (the time column excluded), scaled as asked.
-    rate : float or None
-        Sample rate in Hz (None when the file has no time and none was given).
-    time : ndarray or None
-        Time column in seconds, if the file had one (sample number / rate with
-        ``uniform=True``).
-    notes : list of str
-        What the loader found and did that deserves the user's attention.
-    metadata : dict of str to str
-        Preamble entries other than the sample rate, e.g. ``{"Logging Type": "1"}``.
-    outliers : dict of str to ndarray
-        For each column with outliers, their sample indices in the file (before any drop).
-    segments : list of slice or None
-        With ``gaps="segments"``, the contiguous runs of samples between the
-        time column's gaps; None for a contiguous record.
-    """
-
-    def require_contiguous(self, what: str) -> None:
-        """Refuse a record in segments for ``what``, which needs one contiguous run."""
-        if self.segments is not None and len(self.segments) > 1:
-            raise InputError(f"{self.source}: {what} needs a contiguous record, this one has "
-                             f"{len(self.segments)} segments; pass --fill instead of --segments")
-
-    source: str
-    data: dict[str, np.ndarray]
-    rate: float | None
-    time: np.ndarray | None = None
-    notes: list[str] = field(default_factory=list)
-    metadata: dict[str, str] = field(default_factory=dict)
-    outliers: dict[str, np.ndarray] = field(default_factory=dict)
-    segments: list[slice] | None = None
-
-    @property
-    def n_samples(self) -> int:
-        return len(next(iter(self.data.values())))
-
-    @property
-    def names(self) -> list[str]:
-        return list(self.data)
-
-    def column(self, name: str) -> np.ndarray:
-        """One column by name; a missing name gets the closest existing one suggested."""
-        if name not in self.data:
-            raise InputError(
-                f"{self.source}: no column {name!r}{did_you_mean(name, self.data)}; "
-                f"columns: {', '.join(self.data)}"
-            )
-        return self.data[name]
-
-    def require_rate(self) -> float:
-        if self.rate is None:
-            raise InputError(f"{self.source}: no time column; give the sample rate with --rate HZ")
-        return self.rate
-
-
 class _Preamble(NamedTuple):
     header_index: int  # 0-based line of the header
     entries: list[tuple[int, str, str]]  # (file line, key, value)
@@ -162,13 +103,19 @@ def load_record(
     uniform: bool = False,
     outliers: str = "keep",
     gaps: str = "refuse",
+    topic: str | None = None,
+    temperature_topic: str | None = None,
 ) -> Record:
     """Read and validate a record.
 
     Parameters
     ----------
     path : str or Path
-        CSV (optionally compressed), ``.npy`` or ``.parquet`` file.
+        CSV (optionally compressed), ``.npy`` or ``.parquet`` file; or a ROS bag
+        (``.bag``, a ROS 2 bag directory, ``.db3``, ``.mcap``) or PX4 ULog (``.ulg``),
+        of which one IMU topic is read (:func:`fosmodel.io.topics.read_topic`: columns
+        ``gx``, ``gy``, ``gz`` in rad/s, ``ax``, ``ay``, ``az`` in m/s^2, ``temperature``
+        in degC, their units in ``Record.units``, and its stamps as the time column).
     columns : sequence of str, optional
         Keep only these columns (with the time column and the columns named in
         ``scale``); the others are neither converted nor kept.  Files are read
@@ -196,6 +143,12 @@ def load_record(
         the median one): refuse the record, fill them by linear interpolation
         onto the regular grid, or keep them and list the contiguous runs in
         ``Record.segments`` (to fit on them).  Always reported.
+    topic : str, optional
+        The IMU topic of a log to read; may be left out when the log has one.
+    temperature_topic : str, optional
+        The topic of a log whose temperature becomes the ``temperature`` column,
+        interpolated onto the IMU samples' times (a bag's only temperature topic
+        by default).
 
     Returns
     -------
@@ -210,7 +163,9 @@ def load_record(
         scaling), a bad preamble rate or scale, a time column that is not strictly
         increasing or not uniform (a bursty one without ``uniform``), a rate
         outside ``_RATE_RANGE`` or that disagrees with it, or a drop of samples
-        from a record without time.
+        from a record without time.  For a log, also what
+        :func:`fosmodel.io.topics.read_topic` raises (a :class:`TopicError` when the
+        topic is to be chosen), and a topic given for a file that has none.
     """
     path = Path(path)
     src = str(path)
@@ -221,16 +176,20 @@ def load_record(
         raise InputError(f"outliers must be one of {', '.join(OUTLIER_MODES)}, got {outliers!r}")
     if gaps not in GAP_MODES:
         raise InputError(f"gaps must be one of {', '.join(GAP_MODES)}, got {gaps!r}")
-    names, first_line, preamble = _header(path)
+    log = _sensor_log(path, topic, temperature_topic)
+    names, first_line, preamble = (list(log.columns), 0, _Preamble(0, [])) if log else (
+        _header(path))
     if not names:
         raise InputError(f"{src}: no columns")
     if all(n in TIME_COLUMNS for n in names):
         raise InputError(f"{src}: only a time column, no data columns")
     keep = _kept(names, columns, scale or {}, src)
-    data = _convert(_blocks(path, preamble.header_index, names, keep), src, first_line)
+    blocks = (iter([pd.DataFrame(log.columns)[keep or names]]) if log else
+              _blocks(path, preamble.header_index, names, keep))
+    data = _convert(blocks, src, first_line)
     if not len(next(iter(data.values()))):
         raise InputError(f"{src}: header only, no data rows")
-    notes: list[str] = []
+    notes: list[str] = log.notes if log else []
     rate, given_by, metadata = _preamble_rate(preamble, rate, src, notes)
     _apply_scale(data, scale or {}, src, notes)
     _check_magnitude(data, scale or {}, src, first_line)
@@ -238,7 +197,9 @@ def load_record(
     time = data.pop(time_name) if time_name else None
     if not data:
         raise InputError(f"{src}: only a time column, no data columns")
-    _note_integer_columns(data, scale or {}, notes)
+    units = {name: unit for name, unit in (log.units if log else {}).items()
+             if name in data and name not in (scale or {})}
+    _note_integer_columns(data, [*(scale or {}), *units], notes)
     segments = None
     if time is not None:
         rate, time = _time_base(time, rate, given_by, uniform, src, time_name, first_line,
@@ -248,8 +209,9 @@ def load_record(
     elif uniform:
         notes.append("--uniform has no effect: the record has no time column")
     found = _find_outliers(data)
-    record = Record(src, data, float(rate) if rate is not None else None, time, notes, metadata,
-                    {name: out.index for name, out in found.items()}, segments)
+    record = Record(src, data, float(rate) if rate is not None else None, time, notes,
+                    log.metadata if log else metadata,
+                    {name: out.index for name, out in found.items()}, segments, units)
     _handle_outliers(record, found, outliers, first_line)
     return record
 
@@ -289,11 +251,24 @@ def _factor(text: str) -> float | None:
     return value if np.isfinite(value) and value != 0 else None
 
 
+def _sensor_log(path: Path, topic: str | None, temperature_topic: str | None) -> SensorLog | None:
+    """The IMU topic of a log (a ROS bag, a PX4 ULog), or None for a table."""
+    if not is_sensor_log(path):
+        asked = next((key for key, value in (("topic", topic),
+                                             ("temperature_topic", temperature_topic)) if value),
+                     None)
+        if asked:
+            raise TopicError(f"{path}: not {FORMATS}, so no topic to choose; leave out "
+                             "{option}", asked)
+        return None
+    if not path.is_dir():  # a ROS 2 bag is a directory
+        _check_regular(path)
+    return read_topic(path, topic, temperature_topic)
+
+
 def _header(path: Path) -> tuple[list[str], int, _Preamble]:
     """Column names, the file line of the first data row (0 if rows, not lines), the preamble."""
     _check_regular(path)
-    if path.stat().st_size == 0:
-        raise InputError(f"{path}: the file is empty")
     kind = _kind(path)
     if kind == "npy":
         return _npy_names(_open_npy(path), path), 0, _Preamble(0, [])
@@ -304,7 +279,8 @@ def _header(path: Path) -> tuple[list[str], int, _Preamble]:
 
 
 def _check_regular(path: Path) -> None:
-    """Refuse what is not a regular file: a record is read, and re-read, to its end."""
+    """Refuse what is not a regular file (a record is read, and re-read, to its end), and an
+    empty one."""
     if not path.exists():
         raise InputError(f"{path}: no such file" + (" (a broken symbolic link)"
                                                     if path.is_symlink() else ""))
@@ -317,6 +293,8 @@ def _check_regular(path: Path) -> None:
         target = f" ({path.resolve()})" if path.is_symlink() else ""
         raise InputError(f"{path}{target}: {kind}, not a regular file; fosmodel reads records "
                          "from files")
+    if path.stat().st_size == 0:
+        raise InputError(f"{path}: the file is empty")
 
 
 def _kind(path: Path) -> str:
@@ -558,7 +536,7 @@ def _csv_error(path: Path, skip: int, exc: Exception) -> Exception:
         return InputError(f"{path}: {_non_utf8_line(path)}not UTF-8 text; save the file as "
                           "UTF-8")
     if isinstance(exc, (pd.errors.ParserError, OSError, EOFError, lzma.LZMAError)):
-        return InputError(f"{path}: not a readable CSV file ({_first_line(exc)})")
+        return InputError(f"{path}: not a readable CSV file ({error_line(exc)})")
     return exc
 
 
@@ -595,7 +573,7 @@ def _open_npy(path: Path) -> np.ndarray:
     try:
         arr = np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError) as exc:
-        raise InputError(f"{path}: not a readable .npy file ({_first_line(exc)})") from None
+        raise InputError(f"{path}: not a readable .npy file ({error_line(exc)})") from None
     if not isinstance(arr, np.ndarray):  # np.load opens an .npz archive whatever its name
         raise InputError(f"{path}: an .npz archive, not a .npy array")
     return arr
@@ -636,7 +614,7 @@ def _parquet_file(path: Path):
     try:
         return pq.ParquetFile(path)
     except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for a damaged file
-        raise InputError(f"{path}: not a readable Parquet file ({_first_line(exc)})") from None
+        raise InputError(f"{path}: not a readable Parquet file ({error_line(exc)})") from None
 
 
 def _parquet_blocks(path: Path, keep: list[str] | None) -> Iterator[pd.DataFrame]:
@@ -650,11 +628,7 @@ def _parquet_blocks(path: Path, keep: list[str] | None) -> Iterator[pd.DataFrame
             table = file.schema_arrow.empty_table()
             yield table.select(keep or table.column_names).to_pandas()
     except Exception as exc:  # noqa: BLE001 - pyarrow raises many types for a damaged file
-        raise InputError(f"{path}: not a readable Parquet file ({_first_line(exc)})") from None
-
-
-def _first_line(exc: BaseException) -> str:
-    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"{path}: not a readable Parquet file ({error_line(exc)})") from None
 
 
 def _where(i: int, first_line: int) -> str:
@@ -751,9 +725,10 @@ def _check_magnitude(data: dict[str, np.ndarray], scale: Mapping[str, float], sr
                              f"units or pass --scale {name}=FACTOR")
 
 
-def _note_integer_columns(data: dict[str, np.ndarray], scale: Mapping[str, float],
+def _note_integer_columns(data: dict[str, np.ndarray], known: Collection[str],
                           notes: list[str]) -> None:
-    integer = [n for n, x in data.items() if n not in scale and np.array_equal(x, np.rint(x))]
+    """Note columns of integers, but those whose scale or units are ``known``."""
+    integer = [n for n, x in data.items() if n not in known and np.array_equal(x, np.rint(x))]
     if integer:
         notes.append(f"column(s) {', '.join(integer)} hold only integers: if they are raw "
                      f"counts, scale them, e.g. --scale {integer[0]}=1/16384 for 16384 counts "

@@ -1,0 +1,80 @@
+"""The record the loader returns: validated columns, their sample rate and time, and
+what the loader found (:func:`fosmodel.io.loader.load_record` builds it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.exceptions import InputError
+from ..core.validation import did_you_mean
+
+
+@dataclass
+class Record:
+    """A validated record: equally long, finite float columns and their sample rate.
+
+    Attributes
+    ----------
+    source : str
+        File it came from.
+    data : dict of str to ndarray
+        Numeric columns in file order (the time column excluded), scaled as asked.
+    rate : float or None
+        Sample rate in Hz (None when the file has no time and none was given).
+    time : ndarray or None
+        Time column in seconds, if the file had one (sample number / rate with
+        ``uniform=True``).
+    notes : list of str
+        What the loader found and did that deserves the user's attention.
+    metadata : dict of str to str
+        Preamble entries other than the sample rate, e.g. ``{"Logging Type": "1"}``, or
+        the format and topic of a log.
+    outliers : dict of str to ndarray
+        For each column with outliers, their sample indices in the file (before any drop).
+    segments : list of slice or None
+        With ``gaps="segments"``, the contiguous runs of samples between the
+        time column's gaps; None for a contiguous record.
+    units : dict of str to str
+        The units of the columns whose file says them (a ROS bag's or a ULog's
+        ``gx``: ``"rad/s"``); a column scaled with ``scale`` loses its entry.
+    """
+
+    def require_contiguous(self, what: str) -> None:
+        """Refuse a record in segments for ``what``, which needs one contiguous run."""
+        if self.segments is not None and len(self.segments) > 1:
+            raise InputError(f"{self.source}: {what} needs a contiguous record, this one has "
+                             f"{len(self.segments)} segments; pass --fill instead of --segments")
+
+    source: str
+    data: dict[str, np.ndarray]
+    rate: float | None
+    time: np.ndarray | None = None
+    notes: list[str] = field(default_factory=list)
+    metadata: dict[str, str] = field(default_factory=dict)
+    outliers: dict[str, np.ndarray] = field(default_factory=dict)
+    segments: list[slice] | None = None
+    units: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def n_samples(self) -> int:
+        return len(next(iter(self.data.values())))
+
+    @property
+    def names(self) -> list[str]:
+        return list(self.data)
+
+    def column(self, name: str) -> np.ndarray:
+        """One column by name; a missing name gets the closest existing one suggested."""
+        if name not in self.data:
+            raise InputError(
+                f"{self.source}: no column {name!r}{did_you_mean(name, self.data)}; "
+                f"columns: {', '.join(self.data)}"
+            )
+        return self.data[name]
+
+    def require_rate(self) -> float:
+        if self.rate is None:
+            raise InputError(f"{self.source}: no time column; give the sample rate with --rate HZ")
+        return self.rate
