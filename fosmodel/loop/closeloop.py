@@ -30,10 +30,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.ndimage import uniform_filter1d
 
 from ..core.candidates import Term
-from ..core.derived import fast_name
 from ..core.exceptions import InputError
 from ..core.levels import level_name, level_series, level_tau, levels_for
 from ..core.validation import as_channels, as_signal
@@ -121,11 +121,18 @@ class LoopConfig:
     level_taus: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
+        """Check every option.
+
+        Raises
+        ------
+        InputError
+            A rate, sensor, units, split, significance level or count out of range.
+        """
         if not (np.isfinite(self.rate) and self.rate > 0):
             raise InputError(f"the sample rate must be positive, got {self.rate!r}")
         if (self.sensor is None) != (self.units is None):
             raise InputError("give both the sensor (accel or gyro) and its units, or neither")
-        if self.sensor is not None:
+        if self.sensor is not None and self.units is not None:
             to_si_scale(self.sensor, self.units)
         if not (0 < self.train < 1 and 0 < self.evaluate < 1 and self.train + self.evaluate < 1):
             raise InputError(f"the split {self.train:g} / {self.evaluate:g} must be two positive "
@@ -212,8 +219,11 @@ class LoopResult:
 
 
 def worse_metrics(before: dict, after: dict, tolerance: float = 0.02) -> list[str]:
-    """The metrics (one-step MSE, outage position error, bias RMS at each tau) that ``after``
-    has more than ``1 + tolerance`` times higher than ``before``."""
+    """Return the metrics that ``after`` has more than ``1 + tolerance`` times ``before``'s.
+
+    The metrics are the one-step MSE, the outage MSE and position error and the bias RMS at
+    each tau.
+    """
     pairs = [("one-step MSE", before["mse"], after["mse"]),
              ("outage MSE", before["outage_mse"], after["outage_mse"]),
              ("outage position error", before["outage_position_error_m"],
@@ -225,7 +235,7 @@ def worse_metrics(before: dict, after: dict, tolerance: float = 0.02) -> list[st
 
 
 def close_loop(
-    y: object, channels: Mapping[str, object] | None, config: LoopConfig,
+    y: ArrayLike, channels: Mapping[str, ArrayLike] | None, config: LoopConfig,
     progress: Progress | None = None,
 ) -> LoopResult:
     """Run the residual loop on a record.
@@ -259,7 +269,10 @@ def close_loop(
     diagnose = _Diagnostics(y, channels, segments, config)
     findings = findings_before = diagnose(current)
     residual_before = _residual(current, y, segments)
-    steps, rejected, added, waiting = [], [], [], []
+    steps: list[Step] = []
+    rejected: list[dict] = []
+    added: list[Effect] = []
+    waiting: list[Effect] = []
     while len(steps) < config.max_effects:
         found = effects_from(findings, config.aux_max_lag, taus, config.slow_s)
         candidates = [e for e in [*found, *(w for w in waiting
@@ -302,7 +315,7 @@ def close_loop(
 
 
 def score_family(
-    y: object, channels: Mapping[str, object] | None, config: LoopConfig,
+    y: ArrayLike, channels: Mapping[str, ArrayLike] | None, config: LoopConfig,
     family: CandidateFamily,
 ) -> dict:
     """Prediction-segment metrics of a candidate family fit on the record's fitting segment.
@@ -318,7 +331,7 @@ def score_family(
 
 
 def _segments(n: int, config: LoopConfig) -> Split:
-    """The loop's split of ``n`` samples by ``config``'s fractions, each segment long enough."""
+    """Split ``n`` samples by ``config``'s fractions, each segment long enough."""
     a, b = round(config.train * n), round((config.train + config.evaluate) * n)
     need_eval = 3 * round(config.eval_horizon_s * config.rate)
     need_pred = max(round(config.horizon_s * config.rate) + 1,
@@ -334,14 +347,16 @@ def _segments(n: int, config: LoopConfig) -> Split:
 
 
 class _Fitter:
-    """Fits the FOS model of a candidate family on the fitting segment of one record, and
-    refits its weights on shorter pasts.
+    """Fits the FOS model of a candidate family on the fitting segment of one record.
+
+    It also refits the weights of such a model on shorter pasts.
 
     The record's level series are computed once and passed with the inputs
     (a model would recompute them at every prediction and free run).
     """
 
-    def __init__(self, y, channels, segments, config):
+    def __init__(self, y: np.ndarray, channels: Mapping[str, np.ndarray], segments: Split,
+                 config: LoopConfig) -> None:
         self.y, self.channels, self.config = y, channels, config
         self.train = segments.train
         self._levels: dict[str, np.ndarray] = {}
@@ -376,7 +391,8 @@ class _Judge:
     step after it: the refit drops them) cannot judge it, and is left out.
     """
 
-    def __init__(self, fitter: _Fitter, current: BoundModel, y, segments, config) -> None:
+    def __init__(self, fitter: _Fitter, current: BoundModel, y: np.ndarray, segments: Split,
+                 config: LoopConfig) -> None:
         self.fitter, self.y, self.config = fitter, y, config
         self.segment = segments.evaluate
         self.horizon = round(config.eval_horizon_s * config.rate)
@@ -402,8 +418,10 @@ class _Judge:
         return compare(base, self._forecasts(refit), self.config.accept_alpha)
 
     def __call__(self, trial: BoundModel, effect: Effect, all_origins: bool = False) -> dict:
-        """The comparison at the fitting segment's end, the gains from the earlier origins,
-        and the verdict (``"kept_on"``: the error kind it is kept on, or None).
+        """Judge ``trial``: compare it at the fitting segment's end and from earlier origins.
+
+        The result holds the comparison at the end, the gains from the earlier origins and
+        the verdict (``"kept_on"``: the error kind it is kept on, or None).
 
         Every effect but the level is judged strictly (:func:`fosmodel.loop.judge.verdict`):
         the halves of the segment and every earlier origin catch a function of time
@@ -445,8 +463,9 @@ def _verdict_text(comparison: dict) -> str:
 
 
 def _screen(trials: list[tuple], judge: _Judge) -> tuple[list[tuple], list[Effect]]:
-    """The accepted trials that may go in this round, and the effects that wait for the
-    next; the others' comparisons say why not.
+    """Return the accepted trials that may go in this round, and the effects that wait.
+
+    Those that wait are tried in the next round; the others' comparisons say why not.
 
     Slow errors are mostly stochastic, and the forms of a slow error differ in
     how they run on beyond the data: a level holds still, a channel runs only
@@ -463,14 +482,14 @@ def _screen(trials: list[tuple], judge: _Judge) -> tuple[list[tuple], list[Effec
     """
     by_key = {(t[0].kind, t[0].channel, t[0].form): t for t in trials}
 
-    def gains(key) -> list[float]:
+    def gains(key: tuple) -> list[float]:
         effect, _, model, comparison = by_key[key]
         if comparison["outage_gain_origins"] is None:  # rejected early: judge every origin
             comparison.update({k: v for k, v in judge(model, effect, all_origins=True).items()
                                if k.endswith("_origins")})
         return comparison["outage_gain_origins"]
 
-    def accepted(key) -> bool:
+    def accepted(key: tuple) -> bool:
         return key in by_key and by_key[key][3]["accepted"]
 
     level = ("level", None, None)
@@ -503,13 +522,15 @@ SLOW_MARGIN = 0.2
 
 
 def _clearly_better(gains: list[float], rival: list[float]) -> bool:
-    """Whether, from every origin, ``gains`` remove at least :data:`SLOW_MARGIN` of the
-    error that ``rival`` leaves: ``(g - r) / (1 - r) >= SLOW_MARGIN``."""
+    """Whether ``gains`` remove at least :data:`SLOW_MARGIN` of what ``rival`` leaves.
+
+    From every origin: ``(g - r) / (1 - r) >= SLOW_MARGIN``.
+    """
     return all(g - r >= SLOW_MARGIN * (1.0 - r) for g, r in zip(gains, rival)
                if g is not None and r is not None)
 
 
-def _residual(model: BoundModel, y: np.ndarray, segments) -> np.ndarray:
+def _residual(model: BoundModel, y: np.ndarray, segments: Split) -> np.ndarray:
     """One-step residual over the fitting segment, from the lag window on."""
     stop = segments.train.stop
     return (y[:stop] - model.predict(y[:stop]))[model.lag_window_:]
@@ -533,7 +554,8 @@ class _Diagnostics:
     once (they do not change between models).
     """
 
-    def __init__(self, y, channels, segments, config) -> None:
+    def __init__(self, y: np.ndarray, channels: Mapping[str, np.ndarray], segments: Split,
+                 config: LoopConfig) -> None:
         self.y, self.channels, self.config = y, channels, config
         self.stop = segments.train.stop
         self._aux: dict[int, AuxChannels] = {}
@@ -569,7 +591,7 @@ def _choose(kept: list[tuple]) -> tuple:
     alike over a short stretch, are told apart by their fit to the residual
     when it is strongly better (BIC difference of :data:`STRONG_BIC` or more).
     """
-    def key(item):
+    def key(item: tuple) -> tuple[float, float]:
         c = item[3]
         name = c["kept_on"]
         gains = [g for g in c[f"{name}_gain_origins"] if g is not None]
@@ -600,16 +622,16 @@ def _lag_of(effect: Effect, model: BoundModel) -> int | None:
     """
     if effect.kind != "aux":
         return None
-    channel = fast_name(effect.channel, effect.tau_s) if effect.form == "fast" else effect.channel
+    channel = effect.input_name
     for name in model.model.terms_:
-        lags = [lag for ch, lag in Term.parse(name).factors if ch == channel]
+        lags = [lag for ch, lag in Term.parse(name).factors if ch == channel and lag is not None]
         if lags:
             return int(min(lags))
     return None
 
 
 def _tau_of(effect: Effect, model: BoundModel) -> float | None:
-    """A level's time constant (its first selected level term), or a drift's."""
+    """Return a level's time constant (its first selected level term), or a drift's."""
     if effect.kind == "drift":
         return effect.tau_s
     if effect.kind != "level":
@@ -621,7 +643,7 @@ def _tau_of(effect: Effect, model: BoundModel) -> float | None:
     return None
 
 
-def _metrics(model: BoundModel, y, segment: slice, config: LoopConfig) -> dict:
+def _metrics(model: BoundModel, y: np.ndarray, segment: slice, config: LoopConfig) -> dict:
     """Prediction-segment metrics of a model, and its terms."""
     pred = model.predict(y)
     mse = one_step_mse(y, pred, segment)
@@ -631,7 +653,7 @@ def _metrics(model: BoundModel, y, segment: slice, config: LoopConfig) -> dict:
     return {
         "mse": mse,
         "position_error_m": (equivalent_position_error(mse, config.sensor, config.units)
-                             if config.sensor else None),
+                             if config.sensor and config.units else None),
         "outage_mse": out["outage_mse"],
         "bias_rms": {f"{t:g}": v for t, v in out["bias_rms"].items()},
         "outage_position_error_m": out["outage_position_error_m"],

@@ -66,9 +66,11 @@ class Finding:
 
     @property
     def fired(self) -> bool:
+        """Whether the test fired: its p-value below ``alpha``."""
         return bool(self.p_value < self.alpha)
 
     def to_dict(self) -> dict:
+        """Return the finding as a JSON-ready dict (without the plot data)."""
         return {"test": self.test, "statistic": float(self.statistic),
                 "p_value": float(self.p_value), "alpha": self.alpha, "fired": self.fired,
                 "evidence": self.evidence}
@@ -82,9 +84,11 @@ def _bonferroni(p: float, count: int) -> float:
 
 
 def autocorrelation(x: np.ndarray, nlags: int) -> np.ndarray:
-    """Sample autocorrelation at lags ``0 .. nlags`` (mean removed, sums over N), as
-    statsmodels' ``acf`` defines it, by one dot product per lag: for the few lags the
-    tests read this beats an FFT of a long record several times."""
+    """Return the sample autocorrelation at lags ``0 .. nlags``, as statsmodels' ``acf``.
+
+    Mean removed, sums over N, by one dot product per lag: for the few lags the tests read
+    this beats an FFT of a long record several times.
+    """
     xc = np.asarray(x, dtype=float) - np.mean(x)
     n = len(xc)
     c0 = float(xc @ xc)
@@ -134,7 +138,7 @@ def periodic(
     residual: np.ndarray, time: np.ndarray, rate: float, alpha: float = ALPHA,
     fmin_hz: float | None = None, window: int = 101,
 ) -> Finding:
-    """The strongest spectral peak against the local level of the spectrum.
+    """Find the strongest spectral peak against the local level of the spectrum.
 
     Under a locally white residual, ``s_k / (local median / ln 2)`` is a unit
     exponential variable, so a peak's false-alarm probability over the ``M``
@@ -163,7 +167,7 @@ def refine_frequency(
     x: np.ndarray, time: np.ndarray, f0: float, rate: float, span_bins: float = 1.0,
     step_bins: float = 0.02, phases: int = 16,
 ) -> float:
-    """The frequency near ``f0`` of the single sinusoid FOS selects first.
+    """Return the frequency near ``f0`` of the single sinusoid FOS selects first.
 
     The candidates are ``cos(2 pi f t + phi)`` for ``f`` within ``span_bins``
     FFT bins of ``f0`` in steps of ``step_bins`` bins and ``phases`` phases in
@@ -209,13 +213,15 @@ class _SinusoidCorrelations:
     (given) need the samples.
     """
 
-    def __init__(self, omega, phase, t0, dt, n, target, y_mean_sq):
+    def __init__(self, omega: np.ndarray, phase: np.ndarray, t0: float, dt: float, n: int,
+                 target: np.ndarray, y_mean_sq: float) -> None:
         self.omega, self.phase, self.t0, self.dt, self.n_samples = omega, phase, t0, dt, n
         self.target, self.y_mean, self.y_mean_sq = target, 0.0, y_mean_sq
         self.means = (np.exp(1j * phase) * _exp_sum(omega, t0, dt, n)).real / n
         self.diag = 0.5 + 0.5 * (np.exp(2j * phase) * _exp_sum(2 * omega, t0, dt, n)).real / n
 
     def column(self, j: int) -> np.ndarray:
+        """Return the mean products of candidate ``j`` with every candidate (closed forms)."""
         w, p, n = self.omega, self.phase, self.n_samples
         diff = np.exp(1j * (p - p[j])) * _exp_sum(w - w[j], self.t0, self.dt, n)
         total = np.exp(1j * (p + p[j])) * _exp_sum(w + w[j], self.t0, self.dt, n)
@@ -294,7 +300,7 @@ def _standard(x: np.ndarray) -> np.ndarray | None:
 
 
 def nonlinearity(residual: np.ndarray, lagged: np.ndarray, alpha: float = ALPHA) -> Finding:
-    """RESET-style F test: do squares and cross-products of lagged outputs explain the residual?
+    """Test (RESET-style F) whether squares and products of lagged outputs explain the residual.
 
     ``lagged`` holds ``y[n-1] .. y[n-L]`` row by row (aligned with ``residual``);
     the restricted model has the constant and the lags, the full one adds all
@@ -348,13 +354,21 @@ TREND_FORMS = ("linear", "quadratic", "exponential", "linear+exponential")
 
 
 def trend_columns(time: np.ndarray, form: str, tau_s: float | None, t0: float) -> np.ndarray:
-    """The time functions of a trend form (without the constant)."""
+    """Return the time functions of a trend form (without the constant).
+
+    Raises
+    ------
+    ValueError
+        An exponential form without its time constant ``tau_s``.
+    """
     cols = []
     if form in ("linear", "quadratic", "linear+exponential"):
         cols.append(time - t0)
     if form == "quadratic":
         cols.append((time - t0) ** 2)
     if form in ("exponential", "linear+exponential"):
+        if tau_s is None:
+            raise ValueError(f"the {form} trend needs its time constant tau_s")
         cols.append(np.exp(-(time - t0) / tau_s))
     return np.column_stack(cols)
 
@@ -398,8 +412,10 @@ def trend(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Findi
 
 
 def _trend_fit(form: str, tau: float | None, cols: list, rss0: float, n: int) -> tuple:
-    """``(BIC, form, tau, RSS)`` of the centred columns ``[(column, column . r), ...]``:
-    ``RSS = RSS0 - g' G^-1 g``."""
+    """Return ``(BIC, form, tau, RSS)`` of the centred columns ``[(column, column . r), ...]``.
+
+    ``RSS = RSS0 - g' G^-1 g``.
+    """
     gram = np.array([[float(a @ b) for b, _ in cols] for a, _ in cols])
     g = np.array([gr for _, gr in cols])
     rss = rss0 - float(g @ np.linalg.lstsq(gram, g, rcond=None)[0])

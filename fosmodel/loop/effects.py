@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from typing import TypeVar
 
 import numpy as np
 
@@ -45,6 +46,7 @@ from ..core.derived import (
 from .diagnose import Finding
 
 KINDS = ("aux", "periodic", "nonlinear", "level", "drift", "step")
+_T = TypeVar("_T")
 #: Tests whose firing points to a slow error, for which a level is offered.
 SLOW_TESTS = ("trend", "step", "allan")
 
@@ -70,6 +72,13 @@ class Effect:
     evidence: dict = field(default_factory=dict, compare=False, hash=False)
 
     def __post_init__(self) -> None:
+        """Check the kind.
+
+        Raises
+        ------
+        ValueError
+            A kind not in :data:`KINDS`.
+        """
         if self.kind not in KINDS:
             raise ValueError(f"unknown effect kind {self.kind!r}")
 
@@ -79,18 +88,36 @@ class Effect:
         return self.kind in ("drift", "step") or (self.kind == "aux" and self.form != "fast")
 
     def same_as(self, other: Effect, freq_tol_hz: float = 0.05) -> bool:
-        """The same effect: kind, channel and form (aux) and frequency within ``freq_tol_hz``
-        (periodic)."""
+        """Whether ``other`` is the same effect.
+
+        The same kind, channel and form (aux) and frequency within ``freq_tol_hz``
+        (periodic).
+        """
         if self.kind != other.kind:
             return False
         if self.kind == "aux":
             return self.channel == other.channel and self.form == other.form
         if self.kind == "periodic":
-            return abs(self.freq_hz - other.freq_hz) < freq_tol_hz
+            return abs(_required(self, self.freq_hz, "freq_hz")
+                       - _required(other, other.freq_hz, "freq_hz")) < freq_tol_hz
         return True
 
+    @property
+    def input_name(self) -> str:
+        """The channel an ``aux`` effect's lag candidates read: its channel, or its fast form.
+
+        Raises
+        ------
+        ValueError
+            The effect lacks its channel, or its fast form its ``tau_s``.
+        """
+        channel = _required(self, self.channel, "channel")
+        if self.form == "fast":
+            return fast_name(channel, _required(self, self.tau_s, "tau_s"))
+        return channel
+
     def describe(self) -> str:
-        """A short label: ``aux temp_c (lags 0-3)``, ``periodic 7.3137 Hz``, ..."""
+        """Return a short label: ``aux temp_c (lags 0-3)``, ``periodic 7.3137 Hz``, ..."""
         return {
             "aux": lambda: (f"aux {self.channel}, fast part (lags 0-{self.max_lag})"
                             if self.form == "fast" else
@@ -124,30 +151,38 @@ class CandidateFamily:
 
     def add(self, effect: Effect, channels: Mapping[str, np.ndarray], n_samples: int,
             rate: float, train: slice) -> CandidateFamily:
-        """This family with the candidates of ``effect`` added, for a record of ``n_samples``
-        at ``rate`` Hz whose fitting segment is ``train`` (the training mean of a squared
-        channel)."""
+        """Return this family with the candidates of ``effect`` added.
+
+        For a record of ``n_samples`` at ``rate`` Hz whose fitting segment is ``train`` (the
+        training mean of a squared channel).
+
+        Raises
+        ------
+        ValueError
+            ``effect`` lacks a field its kind needs.
+        """
         exog, degree, levels = dict(self.exog_lags), self.degree, self.levels
         product_lags = self.product_lags
         names: list[str] = []
-        if effect.kind == "aux" and effect.form == "fast":
-            name = fast_name(effect.channel, effect.tau_s)
-            exog[name] = max(exog.get(name, 0), effect.max_lag)
-            channels = {**channels, name: derive(name, n_samples, rate, channels, {})}
-        elif effect.kind == "aux":
-            exog[effect.channel] = max(exog.get(effect.channel, 0), effect.max_lag)
-            names.append(square_name(effect.channel))
+        if effect.kind == "aux":
+            name, max_lag = effect.input_name, _required(effect, effect.max_lag, "max_lag")
+            exog[name] = max(exog.get(name, 0), max_lag)
+            if effect.form == "fast":
+                channels = {**channels, name: derive(name, n_samples, rate, channels, {})}
+            else:
+                names.append(square_name(name))
         elif effect.kind == "periodic":
-            names += [cosine_name(effect.freq_hz), sine_name(effect.freq_hz)]
+            freq_hz = _required(effect, effect.freq_hz, "freq_hz")
+            names += [cosine_name(freq_hz), sine_name(freq_hz)]
         elif effect.kind == "nonlinear":
             degree = max(degree, 2)
             product_lags = effect.max_lag
         elif effect.kind == "level":
-            levels = tuple(sorted({*levels, *effect.taus}))
+            levels = tuple(sorted({*levels, *_required(effect, effect.taus, "taus")}))
         elif effect.kind == "drift":
-            names += [TIME_NAME, exp_name(effect.tau_s)]
+            names += [TIME_NAME, exp_name(_required(effect, effect.tau_s, "tau_s"))]
         else:  # step
-            names.append(step_name(effect.time_s))
+            names.append(step_name(_required(effect, effect.time_s, "time_s")))
         means = {ch: float(channels[ch][train].mean()) for ch in channels_read(names)}
         cols = {**self.columns,
                 **{name: derive(name, n_samples, rate, channels, means) for name in names}}
@@ -156,10 +191,23 @@ class CandidateFamily:
                        inputs=inputs, product_lags=product_lags)
 
 
+def _required(effect: Effect, value: _T | None, name: str) -> _T:
+    """Return ``value``, the field ``name`` of ``effect``.
+
+    Raises
+    ------
+    ValueError
+        ``value`` is None: the effect lacks a field its kind needs.
+    """
+    if value is None:
+        raise ValueError(f"a {effect.kind} effect needs its {name}")
+    return value
+
+
 def effects_from(findings: list[Finding], aux_max_lag: int,
                  level_taus: tuple[float, ...] = (), fast_tau_s: float | None = None,
                  ) -> list[Effect]:
-    """The candidate effects that the fired findings point to.
+    """Return the candidate effects that the fired findings point to.
 
     A slow residual usually fires the trend, the step and the Allan test at
     once.  A wandering bias is offered as a local level (over ``level_taus``)

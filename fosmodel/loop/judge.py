@@ -33,12 +33,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from scipy import stats
 
 from ..models.bound import BoundModel
-from ..noise.metrics import free_run_errors
+from ..noise.metrics import FreeRunModel, free_run_errors
 
 MAX_WINDOWS = 100  # most outage windows of the evaluation test
 MIN_HALF_WINDOWS = 20  # outage windows in each half of the evaluation segment to judge it
@@ -57,18 +58,27 @@ class Forecasts:
     outage: np.ndarray  # (windows, samples)
 
 
+class Forecaster(FreeRunModel, Protocol):
+    """A model that predicts one step ahead and runs free: FOSModel, a baseline, a BoundModel."""
+
+    def predict(self, y: np.ndarray) -> np.ndarray:
+        """Return the one-step prediction of ``y``, aligned with it."""
+
+
 def outage_windows(segment: slice, horizon: int) -> np.ndarray:
-    """Starts of consecutive outage windows of ``horizon`` samples in ``segment``, at most
-    :data:`MAX_WINDOWS` of them, evenly spread (enough for the t test)."""
+    """Return the starts of consecutive outage windows of ``horizon`` samples in ``segment``.
+
+    At most :data:`MAX_WINDOWS` of them, evenly spread (enough for the t test).
+    """
     starts = np.arange(segment.start, segment.stop - horizon + 1, horizon)
     if len(starts) > MAX_WINDOWS:
         starts = starts[np.linspace(0, len(starts) - 1, MAX_WINDOWS).round().astype(int)]
     return starts
 
 
-def forecasts(model: object, y: np.ndarray, segment: slice, starts: np.ndarray,
+def forecasts(model: Forecaster, y: np.ndarray, segment: slice, starts: np.ndarray,
               horizon: int) -> Forecasts:
-    """The one-step and outage errors of ``model`` on ``segment`` of the record ``y``."""
+    """Return the one-step and outage errors of ``model`` on ``segment`` of the record ``y``."""
     stop = segment.stop
     pred = (model.predict(y[:stop], start=segment.start) if isinstance(model, BoundModel)
             else model.predict(y[:stop]))
@@ -77,7 +87,7 @@ def forecasts(model: object, y: np.ndarray, segment: slice, starts: np.ndarray,
 
 
 def compare(a: Forecasts, b: Forecasts, alpha: float) -> dict:
-    """Does ``b`` beat ``a`` by more than noise would, and all along the segment?
+    """Test whether ``b`` beats ``a`` by more than noise would, and all along the segment.
 
     For each of the one-step and the outage errors: the encompassing
     ``beta``, its one-sided t statistic and p-value, the share of the
@@ -141,15 +151,18 @@ def _encompassing(groups: list[tuple[np.ndarray, np.ndarray]]) -> tuple[float, f
 
 
 def passes(at_origin: dict, halves: bool = True) -> list[str]:
-    """The error kinds on which a candidate passes at the fitting segment's end with a gain of
-    at least :data:`MIN_GAIN` (over each half of the segment too, with ``halves``)."""
+    """Return the error kinds on which a candidate passes at the fitting segment's end.
+
+    Each with a gain of at least :data:`MIN_GAIN` (over each half of the segment too, with
+    ``halves``).
+    """
     found = at_origin["passes" if halves else "passes_whole"]
     return [name for name in found if at_origin[f"{name}_gain"] >= MIN_GAIN]
 
 
 def verdict(at_origin: dict, earlier: list[dict], alpha: float,
             strict: bool = True) -> str | None:
-    """The error kind on which a candidate is kept, or None.
+    """Return the error kind on which a candidate is kept, or None.
 
     It must pass :func:`compare` at the fitting segment's end on that kind
     with a gain of at least :data:`MIN_GAIN` and not make the other kind's
