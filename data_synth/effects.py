@@ -208,15 +208,19 @@ class Vibration(Source):
 
     def __post_init__(self):
         object.__setattr__(self, "amplitudes", as_float_tuple(self.amplitudes, "amplitudes"))
-        phases = (0.0,) * len(self.amplitudes) if self.phases_rad is None else self.phases_rad
-        object.__setattr__(self, "phases_rad", as_float_tuple(phases, "phases_rad"))
-        if len(self.phases_rad) != len(self.amplitudes) or self.freq_hz <= 0:
+        object.__setattr__(self, "phases_rad", as_float_tuple(self.phases, "phases_rad"))
+        if len(self.phases) != len(self.amplitudes) or self.freq_hz <= 0:
             raise ValueError(f"{self.label}: need freq_hz > 0 and one phase per amplitude")
+
+    @property
+    def phases(self) -> tuple[float, ...]:
+        """The phase of each harmonic in radians: ``phases_rad``, zeros if none were given."""
+        return (0.0,) * len(self.amplitudes) if self.phases_rad is None else self.phases_rad
 
     def generate(self, n, rate, rng, inputs=None):
         t = _time(n, rate)
         out = np.zeros(n)
-        for h, (amp, phase) in enumerate(zip(self.amplitudes, self.phases_rad), start=1):
+        for h, (amp, phase) in enumerate(zip(self.amplitudes, self.phases), start=1):
             out += amp * np.sin(2 * math.pi * h * self.freq_hz * t + phase)
         return out
 
@@ -232,7 +236,7 @@ class Vibration(Source):
                     "phase_rad": ph,
                     "fft_bin": h * self.freq_hz * n / rate,
                 }
-                for h, (a, ph) in enumerate(zip(self.amplitudes, self.phases_rad), start=1)
+                for h, (a, ph) in enumerate(zip(self.amplitudes, self.phases), start=1)
             ],
             "formula": "sum_h amplitude*sin(2*pi*freq_hz*t + phase_rad), t = n/rate_hz",
             "units": {"freq_hz": "Hz", "amplitude": units, "phase_rad": "rad"},

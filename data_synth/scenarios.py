@@ -234,9 +234,11 @@ def _gyro_array_8(units="deg/s", rho_arw=0.0, rho_rrw=0.0, typical=False):
     rrw = (ARRAY_TYPICAL[1],) * 8 if typical else ARRAY_RRW
     sources = [
         CorrelatedWhiteNoise(
-            names, [arw_to_density(a, units, per="sqrt(s)") for a in arw], rho_arw, name="arw"
+            names, tuple(arw_to_density(a, units, per="sqrt(s)") for a in arw), rho_arw,
+            name="arw",
         ),
-        CorrelatedRandomWalk(names, [rrw_to_density(r, units) for r in rrw], rho_rrw, name="rrw"),
+        CorrelatedRandomWalk(names, tuple(rrw_to_density(r, units) for r in rrw), rho_rrw,
+                             name="rrw"),
     ]
     return dict(
         sources=sources, target="gyro_1", units=units, column_units={n: units for n in names}

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -56,7 +57,8 @@ def evaluate(
 
 def add_term(terms: TermSet, factors: Iterable[Factor], coef: float) -> None:
     """Add ``coef`` to the coefficient of ``factors`` in ``terms`` (in place)."""
-    key = Term(tuple(factors)).factors
+    # Term puts the factors in canonical order; they stay (channel, int lag) pairs
+    key = cast(Factors, Term(tuple(factors)).factors)
     terms[key] = terms.get(key, 0.0) + float(coef)
 
 
@@ -107,10 +109,11 @@ def exact_model(parts: Sequence[Representation | None]) -> Representation | None
       AR component ``a(z)`` turns every other (exogenous) term ``x[n]`` into
       ``x[n] - sum_k a_k x[n-k]``; a nonlinear one admits no other component.
     """
-    if any(p is None for p in parts):
+    present = [p for p in parts if p is not None]
+    if len(present) < len(parts):
         return None
-    recursive = [p for p in parts if p.recursive]
-    others = [p for p in parts if not p.recursive]
+    recursive = [p for p in present if p.recursive]
+    others = [p for p in present if not p.recursive]
     exog: TermSet = {}
     for p in others:
         for f, c in p.terms.items():
