@@ -1,9 +1,10 @@
 """The layers contract: fosmodel's folders are layers, and imports run one way, down.
 
-    core -> models -> io -> noise -> filter -> {study, loop} -> cli, demo
+    core -> models -> io -> noise -> filter -> {study, loop} -> workflows -> cli, demo
 
 A module may import its own folder and the folders below it (``study`` and
-``loop`` are side by side and never import each other); ``data_synth`` is a
+``loop`` are side by side and never import each other; ``workflows`` puts them
+together over a whole record); ``data_synth`` is a
 client of the layers up to ``filter`` that only the application (``cli``,
 ``demo``) uses.  Every import counts, also one inside a function.
 """
@@ -17,7 +18,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 RANK = {"_version": 0, "core": 0, "models": 1, "io": 2, "noise": 3, "filter": 4, "study": 5,
-        "loop": 5, "data_synth": 5.5, "cli": 6, "demo": 6, "__init__": 6}
+        "loop": 5, "data_synth": 5.5, "workflows": 5.7, "cli": 6, "demo": 6, "__init__": 6}
 
 
 def _name(path: Path) -> str:

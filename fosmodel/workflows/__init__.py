@@ -1,0 +1,1 @@
+"""Workflows: the steps below (noise, study, loop) put together over a whole record."""

@@ -1,0 +1,287 @@
+"""The six-axis workflow: every axis of an IMU record through the Allan analysis, the
+model-order study and the residual loop, in one report.
+
+The Allan analysis fits all axes at once (:func:`fosmodel.noise.imu_noise.imu_noise`);
+the study (:func:`fosmodel.study.runner.run_study`) and the loop
+(:func:`fosmodel.loop.closeloop.close_loop`) of each axis are independent tasks, run
+``n_jobs`` at a time in worker processes (joblib), each reported as it ends.  The loop
+of an axis may use the record's other columns (the other axes, the temperature) as
+auxiliary channels.  The results are the same whatever ``n_jobs``: every step is
+deterministic.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..core.exceptions import InputError
+from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_covariance
+from ..filter.statespace import StateSpace
+from ..loop.closeloop import LoopConfig, LoopResult, close_loop
+from ..noise.axes import Axis
+from ..noise.imu_noise import ImuNoise, imu_noise
+from ..study.harness import METHODS, StudyConfig, StudyResult
+from ..study.runner import run_study
+
+Progress = Callable[[str], None]
+STEPS = ("allan", "study", "loop")
+
+
+@dataclass(frozen=True)
+class ImuConfig:
+    """What the six-axis workflow runs on each axis.
+
+    Parameters
+    ----------
+    orders, degrees, methods, protocols
+        The model-order study's grid (:class:`fosmodel.study.harness.StudyConfig`); the
+        fair protocol only by default (every method on the same raw data).
+    train_s, evaluate_s : float
+        The study's fitting and selection segments (s); the rest is predicted.
+    horizon_s, n_starts : float, int
+        Outage metrics of the study and the loop.
+    loop_split : tuple of float
+        Fractions of the record the loop fits on and evaluates on.
+    loop_max_lag : int
+        L of the loop's starting model.
+    min_tau : float, optional
+        Shortest averaging time of the Allan fits (default: found per axis).
+    n_jobs : int
+        Study and loop tasks run at once (1: in this process).
+    """
+
+    orders: Sequence[int] = tuple(range(1, 11))
+    degrees: Sequence[int] = (1, 2)
+    methods: Sequence[str] = METHODS
+    protocols: Sequence[str] = ("fair",)
+    train_s: float = 180.0
+    evaluate_s: float = 180.0
+    horizon_s: float = 30.0
+    n_starts: int = 20
+    loop_split: tuple[float, float] = (0.5, 0.2)
+    loop_max_lag: int = 10
+    min_tau: float | None = None
+    n_jobs: int = 2
+
+    def study_config(self, rate: float, axis: Axis) -> StudyConfig:
+        """The study of one axis."""
+        return StudyConfig(rate=rate, sensor=axis.sensor, units=axis.units, orders=self.orders,
+                           degrees=self.degrees, methods=self.methods, protocols=self.protocols,
+                           train_s=self.train_s, evaluate_s=self.evaluate_s,
+                           horizon_s=self.horizon_s, n_starts=self.n_starts)
+
+    def loop_config(self, rate: float, axis: Axis) -> LoopConfig:
+        """The residual loop of one axis."""
+        return LoopConfig(rate=rate, sensor=axis.sensor, units=axis.units,
+                          max_lag=self.loop_max_lag, train=self.loop_split[0],
+                          evaluate=self.loop_split[1], horizon_s=self.horizon_s,
+                          n_starts=self.n_starts)
+
+
+@dataclass
+class AxisResult:
+    """One axis through every step, with each step's run time (s)."""
+
+    axis: Axis
+    study: StudyResult
+    loop: LoopResult
+    seconds: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
+class ImuResult:
+    """The workflow's results: the noise of every axis, and each axis's study and loop."""
+
+    source: str
+    rate: float
+    n_samples: int
+    config: ImuConfig
+    noise: ImuNoise
+    axes: list[AxisResult]
+    aux: list[str]
+    allan_seconds: float
+
+    def study_table(self) -> pd.DataFrame:
+        """Per axis, the best FOS and the best baseline of the study (chosen on the
+        evaluation segment) and their errors on the prediction segment."""
+        return pd.DataFrame([_study_row(a) for a in self.axes])
+
+    def loop_table(self) -> pd.DataFrame:
+        """Per axis, the effects the loop kept and the prediction-segment errors before
+        and after them."""
+        return pd.DataFrame([_loop_row(a) for a in self.axes])
+
+    def timing_table(self) -> pd.DataFrame:
+        """Run time of each step per axis (s); the Allan fits ran on all axes at once."""
+        return pd.DataFrame([{"axis": a.axis.column, **{f"{k} (s)": round(v, 2) for k, v in
+                                                        a.seconds.items()}} for a in self.axes])
+
+    def filter_model(self) -> StateSpace:
+        """The axes' Allan error models (white noise, Gauss-Markov, random-walk bias) as one
+        block-diagonal shaping filter at the record's rate
+        (:func:`fosmodel.filter.allan_statespace.assemble_axes`)."""
+        return assemble_axes({a.axis.column: allan_state_space(a.fit) for a in self.noise.axes})
+
+    def filter_dict(self) -> dict[str, Any]:
+        """:meth:`filter_model` with its initial covariance, as JSON-ready lists."""
+        model = self.filter_model()
+        return {"source": self.source, "rate_hz": self.rate,
+                "axes": [a.axis.column for a in self.noise.axes],
+                "units": {a.axis.column: a.axis.units for a in self.noise.axes},
+                **model.to_dict(), "P0": initial_covariance(model, self.n_samples).tolist()}
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every table of the report as records, and the noise parameters."""
+        return {"source": self.source, "rate_hz": self.rate, "n_samples": self.n_samples,
+                "aux": self.aux, "noise": self.noise.to_dict(),
+                "study": _records(self.study_table()), "loop": _records(self.loop_table()),
+                "loops": {a.axis.column: a.loop.to_json_dict() for a in self.axes}}
+
+
+def run_imu(
+    columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: float, source: str = "",
+    *, aux: Mapping[str, np.ndarray] | None = None, config: ImuConfig | None = None,
+    progress: Progress | None = None,
+) -> ImuResult:
+    """Run the Allan analysis, the model-order study and the residual loop on every axis.
+
+    Parameters
+    ----------
+    columns : mapping of str to ndarray
+        The rate signals by column name (each axis's ``column`` in it), of equal length.
+    axes : sequence of Axis
+        The columns with their sensors and units (:func:`fosmodel.noise.axes.resolve_axes`).
+    rate : float
+        Sample rate in Hz.
+    source : str
+        Where the record came from.
+    aux : mapping of str to ndarray, optional
+        Further channels (a temperature) the loop may use besides the other axes.
+    config : ImuConfig, optional
+    progress : callable, optional
+        Called with one line as each step of each axis ends.
+
+    Returns
+    -------
+    ImuResult
+
+    Raises
+    ------
+    InputError
+        No axis, an axis missing from ``columns``, or columns of unequal length.
+    """
+    config = config or ImuConfig()
+    say = progress or (lambda line: None)
+    _check(columns, axes, aux or {})
+    n = len(columns[axes[0].column])
+    start = time.perf_counter()
+    noise = imu_noise(columns, axes, rate, source, min_tau=config.min_tau)
+    allan_s = time.perf_counter() - start
+    say(f"allan: {len(axes)} axes in {allan_s:.1f} s")
+    channels = {**{a.column: columns[a.column] for a in axes}, **(aux or {})}
+    done: dict[tuple[str, str], tuple[Any, float]] = {}
+    for (column, step), outcome, seconds in _run_tasks(channels, axes, rate, config):
+        done[column, step] = outcome, seconds
+        say(f"{step}: {column} in {seconds:.1f} s ({_brief(step, outcome)}); "
+            f"{len(done)}/{2 * len(axes)} tasks done")
+    results = [AxisResult(a, done[a.column, "study"][0], done[a.column, "loop"][0],
+                          {"study": done[a.column, "study"][1],
+                           "loop": done[a.column, "loop"][1]}) for a in axes]
+    return ImuResult(source, float(rate), n, config, noise, results, sorted(aux or {}), allan_s)
+
+
+def _check(columns: Mapping[str, np.ndarray], axes: Sequence[Axis],
+           aux: Mapping[str, np.ndarray]) -> None:
+    if not axes:
+        raise InputError("no axis to analyse")
+    missing = [a.column for a in axes if a.column not in columns]
+    if missing:
+        raise InputError(f"no column {', '.join(map(repr, missing))} among the signals given")
+    lengths = {name: len(x) for name, x in
+               [*((a.column, columns[a.column]) for a in axes), *aux.items()]}
+    if len(set(lengths.values())) > 1:
+        raise InputError("the columns differ in length: "
+                         + ", ".join(f"{k} {v}" for k, v in lengths.items()))
+
+
+def _task(step: str, column: str, channels: Mapping[str, np.ndarray], axis: Axis, rate: float,
+          config: ImuConfig) -> tuple[tuple[str, str], Any, float]:
+    """One step of one axis (a worker process runs it); returns its key, result and time."""
+    start = time.perf_counter()
+    y = channels[column]
+    if step == "study":
+        outcome: Any = run_study(y, config.study_config(rate, axis))
+    else:
+        others = {k: v for k, v in channels.items() if k != column}
+        outcome = close_loop(y, others, config.loop_config(rate, axis))
+    return (column, step), outcome, time.perf_counter() - start
+
+
+def _run_tasks(channels: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: float,
+               config: ImuConfig) -> Iterator[tuple[tuple[str, str], Any, float]]:
+    """The study and the loop of every axis, longest first, as they end."""
+    tasks = [(step, a.column, channels, a, rate, config) for step in ("loop", "study")
+             for a in axes]
+    if config.n_jobs == 1:
+        yield from (_task(*t) for t in tasks)
+        return
+    from joblib import Parallel, delayed
+
+    # each worker gets one BLAS thread (joblib's default for n_jobs processes on as many
+    # cores); the signals are memory-mapped to the workers, not copied per task
+    run = Parallel(n_jobs=config.n_jobs, return_as="generator_unordered")
+    yield from run(delayed(_task)(*t) for t in tasks)
+
+
+def _brief(step: str, outcome: Any) -> str:
+    if step == "study":
+        return f"{len(outcome.rows)} fits"
+    kept = [s.effect.describe() for s in outcome.steps]
+    return f"{len(kept)} effect(s) kept"
+
+
+def _best(rows: pd.DataFrame, fos: bool) -> pd.Series:
+    """The row with the lowest evaluation MSE among FOS's forms or among the baselines'."""
+    is_fos = rows["method"].str.startswith("fos")
+    pick = rows[is_fos if fos else ~is_fos]
+    return pick.loc[pick["evaluate_mse"].idxmin()]
+
+
+def _study_row(a: AxisResult) -> dict[str, Any]:
+    rows = a.study.rows[a.study.rows["protocol"] == "fair"] if "fair" in \
+        a.study.config.protocols else a.study.rows
+    fos, base = _best(rows, True), _best(rows, False)
+    return {"axis": a.axis.column, "units": a.axis.units,
+            "FOS": f"{fos['label']} L={fos['order']}",
+            "FOS outage error (m, 30 s)": fos["outage_position_error_m"],
+            "FOS bias RMS 30 s": fos["bias_rms_30s"],
+            "best baseline": f"{base['label']} L={base['order']}",
+            "baseline outage error (m, 30 s)": base["outage_position_error_m"],
+            "baseline bias RMS 30 s": base["bias_rms_30s"],
+            "FOS / baseline (outage)": fos["outage_position_error_m"]
+            / base["outage_position_error_m"]}
+
+
+def _loop_row(a: AxisResult) -> dict[str, Any]:
+    loop = a.loop
+    before, after = loop.before, loop.after
+    return {"axis": a.axis.column, "units": a.axis.units,
+            "effects kept": len(loop.steps),
+            "kept": "; ".join(s.effect.describe() for s in loop.steps) or "none",
+            "outage error before (m)": before["outage_position_error_m"],
+            "outage error after (m)": after["outage_position_error_m"],
+            "30 s bias RMS before": before["bias_rms"]["30"],
+            "30 s bias RMS after": after["bias_rms"]["30"],
+            "still firing": ", ".join(loop.unexplained) or "none",
+            "worse on prediction": ", ".join(loop.worse()) or "none"}
+
+
+def _records(frame: pd.DataFrame) -> list[dict[str, Any]]:
+    return [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()}
+            for row in frame.to_dict(orient="records")]

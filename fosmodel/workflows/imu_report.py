@@ -1,0 +1,164 @@
+"""The six-axis workflow's report: one page with a table per step, the noise exports, the
+error models for a filter, and each axis's own reports beneath it.
+
+Layout of the report directory::
+
+    report.md            the page: noise, study and loop tables (a row per axis), run times
+    noise.* study.* loop.* timing.*   each table as Markdown, CSV and LaTeX
+    noise/               the Allan report of all axes: imu.yaml (Kalibr), imu_params.m
+                         (MATLAB), imu_noise.json, the figures, each axis under noise/axes/
+    study/AXIS/          each axis's model-order study
+    loop/AXIS/           each axis's residual loop
+    models/AXIS.json     each axis's FOS error model (``fosmodel predict`` reads it)
+    filter/allan_model.json   the axes' Allan error models as one state-space shaping filter
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import pandas as pd
+
+from ..io.model_file import write_model
+from ..io.output import write_tables, write_text
+from ..loop.loop_report import write_loop_report
+from ..models.summary import markdown_table
+from ..noise.imu_noise import write_imu_noise
+from ..study.report import write_study
+from .imu import AxisResult, ImuResult
+
+
+def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]:
+    """Write the whole report of :func:`fosmodel.workflows.imu.run_imu` into ``out_dir``.
+
+    Parameters
+    ----------
+    result : ImuResult
+    out_dir : Path
+        An existing directory (the command publishes it atomically).
+    title : str
+        The report's title.
+
+    Returns
+    -------
+    list of Path
+        Every file written.
+    """
+    tables = {
+        "noise": (result.noise.table(), f"{title}: Allan noise parameters of every axis"),
+        "study": (result.study_table(), f"{title}: best FOS and best baseline of each axis "
+                  "(chosen on the evaluation segment), errors on the prediction segment"),
+        "loop": (result.loop_table(), f"{title}: the residual loop of each axis, errors on "
+                 "the prediction segment before and after the effects kept"),
+        "timing": (result.timing_table(), f"{title}: run time of each step"),
+    }
+    paths = []
+    for stem, (frame, caption) in tables.items():
+        paths += write_tables(frame, out_dir, stem, caption, report=title)
+    for part in _in_parallel(_parts(result, out_dir, title), result.config.n_jobs):
+        paths += part
+    models = [_write_model(result, a, _mkdir(out_dir / "models")) for a in result.axes]
+    filter_path = _mkdir(out_dir / "filter") / "allan_model.json"
+    write_text(filter_path, json.dumps(result.filter_dict(), indent=1) + "\n")
+    report = out_dir / "report.md"
+    write_text(report, _page(result, title, tables, models))
+    return [*paths, *(p for p, _ in models), filter_path, report]
+
+
+def _parts(result: ImuResult, out_dir: Path, title: str) -> list[tuple[Callable, tuple]]:
+    """The reports beneath the page, each a writer and its arguments: most of the time of a
+    report goes into drawing their figures, so they are drawn in parallel."""
+    parts: list[tuple[Callable, tuple]] = [
+        (write_imu_noise, (result.noise, _mkdir(out_dir / "noise"), title))]
+    for a in result.axes:
+        parts += [(write_study, (a.study, out_dir / "study" / a.axis.column,
+                                 f"{title} {a.axis.column} ({a.axis.units})")),
+                  (write_loop_report, (a.loop, out_dir / "loop" / a.axis.column,
+                                       f"{title} {a.axis.column}"))]
+    return parts
+
+
+def _in_parallel(parts: list[tuple[Callable, tuple]], n_jobs: int) -> Iterable[list[Path]]:
+    if n_jobs == 1:
+        return [write(*args) for write, args in parts]
+    from joblib import Parallel, delayed
+
+    return Parallel(n_jobs=n_jobs)(delayed(write)(*args) for write, args in parts)
+
+
+def _mkdir(path: Path) -> Path:
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def _write_model(result: ImuResult, a: AxisResult, folder: Path) -> tuple[Path, str]:
+    """The loop's final model of the axis, or its starting model when the effects it kept
+    made the prediction segment worse; returns the file and which model it holds."""
+    worse = a.loop.worse()
+    bound, which = ((a.loop.base_model, "the loop's starting model (its effects made the "
+                     "prediction segment worse)") if worse and a.loop.steps
+                    else (a.loop.final_model, "the loop's final model"))
+    path = folder / f"{a.axis.column}.json"
+    meta = {"source": result.source, "column": a.axis.column, "units": a.axis.units,
+            "sensor": a.axis.sensor, "rate_hz": result.rate, "n_samples": result.n_samples,
+            "fitted_on": "close-loop fitting segment", "model": which}
+    write_model(path, bound.model, meta)
+    return path, which
+
+
+def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, str]],
+          models: list[tuple[Path, str]]) -> str:
+    duration = result.n_samples / result.rate
+    lines = [f"# {title}", "",
+             f"Record: `{result.source}`, {result.n_samples:,} samples per axis at "
+             f"{result.rate:g} Hz ({duration / 3600:.3g} h); axes: "
+             + ", ".join(a.axis.describe() for a in result.axes)
+             + (f"; auxiliary channels of the loop: {', '.join(result.aux)}" if result.aux
+                else "") + ".", ""]
+    sections = [
+        ("Noise parameters (Allan variance)", "noise",
+         "IEEE Std 952 terms fitted to each axis's overlapping Allan deviation; exports for "
+         "Kalibr (`noise/imu.yaml`), MATLAB (`noise/imu_params.m`) and JSON "
+         "(`noise/imu_noise.json`); figures `noise/allan_gyro.png`, `noise/allan_accel.png`."),
+        ("Model-order study", "study",
+         "Each method fitted on the first segment, its order chosen on the second, scored on "
+         "the rest (fair protocol: every method on the same raw data). Each axis's full "
+         "report is in `study/AXIS/`."),
+        ("Residual loop", "loop",
+         "Effects kept only when they lower the error on data the model was not fitted on; "
+         "errors on the prediction segment, which no choice has seen. Each axis's report is "
+         "in `loop/AXIS/`."),
+    ]
+    for heading, stem, text in sections:
+        frame, caption = tables[stem]
+        lines += [f"## {heading}", "", text, "", f"Table: {caption}.", "",
+                  markdown_table(frame, digits=4), ""]
+        if stem == "loop":
+            lines += _loop_warnings(result)
+    lines += ["## Error models for a filter", "",
+              "- `filter/allan_model.json`: every axis's Allan error model (white noise, a "
+              "first-order Gauss-Markov bias instability, a random-walk bias) as one "
+              "block-diagonal shaping filter at the record's rate: Phi, G, Q, H and the "
+              "initial covariance P0 (see the docs' Kalman page)."]
+    lines += [f"- `models/{p.name}`: {which} (FOS; `fosmodel predict` reads it)."
+              for p, which in models]
+    frame, caption = tables["timing"]
+    lines += ["", "## Run times", "",
+              f"Allan analysis of all axes: {result.allan_seconds:.1f} s; then the study and "
+              f"the loop of each axis, {result.config.n_jobs} at a time.", "",
+              markdown_table(frame, digits=4), ""]
+    return "\n".join(lines)
+
+
+def _loop_warnings(result: ImuResult) -> list[str]:
+    """A plain sentence for every axis whose kept effects made unseen data worse."""
+    out = []
+    for a in result.axes:
+        worse = a.loop.worse()
+        if worse and a.loop.steps:
+            out.append(f"On {a.axis.column} the effects kept made the prediction segment "
+                       f"worse ({', '.join(worse)}): they do not hold up, and the model "
+                       f"written for it is the loop's starting model.")
+    return [*out, ""] if out else []
