@@ -27,14 +27,14 @@ matrix from :func:`fosmodel.core.candidates.evaluate_terms`.
 from __future__ import annotations
 
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from functools import lru_cache
 
 import numpy as np
 
 from .blas import one_blas_thread
 from .candidates import OUTPUT, Term
-from .shapes import Batch, direct_groups, layout, plan_batch
+from .shapes import Batch, NewShapes, direct_groups, layout, plan_batch
 
 _GEMM_SAMPLES = 200_000  # from this window length, weighted sums of pairs go through BLAS
 _CHUNK = 4096  # samples per block of those sums: the block's factors stay in cache
@@ -42,7 +42,7 @@ _SCRATCH = threading.local()
 
 
 def _scratch(depth: int, size: int) -> np.ndarray:
-    """A work array of ``size`` floats for one prefix depth, reused by this thread.
+    """Return a work array of ``size`` floats for one prefix depth, reused by this thread.
 
     Fresh arrays of this size come from mmap and pay a page fault per 4 kB on
     first touch, which costs more than the products written into them.
@@ -129,7 +129,8 @@ class LagCorrelations:
 
     # -- moments ---------------------------------------------------------------------------
 
-    def _apply(self, batch: Batch, ch, lag, extra=None) -> np.ndarray:
+    def _apply(self, batch: Batch, ch: np.ndarray, lag: np.ndarray,
+               extra: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """Window means of the products given row-wise by (channel, lag), as ``batch`` plans.
 
         ``extra`` is the factor row ``(channels, lags)`` common to every product
@@ -137,7 +138,7 @@ class LagCorrelations:
         directly summed rows use it as a shared weight.
         """
         if batch.new is not None:
-            self._add_shapes(batch)
+            self._add_shapes(batch, batch.new)
         table, s = batch.table, batch.slot
         lo = batch.lmin[table]
         tabulated = self._sums[s] + self._head_sums[s, self._n0 - lo] - self._tail_sums[s, lo]
@@ -172,8 +173,10 @@ class LagCorrelations:
         return self._squares[ch][lo - rel : hi - rel]
 
     def _edges(self, lo: int) -> np.ndarray:
-        """E[ch, i, rel] = u_ch(lo + i - rel) for i < N0, rel <= N0 (zero before the record
-        starts), and a last channel of ones."""
+        """Return E[ch, i, rel] = u_ch(lo + i - rel) for i < N0, rel <= N0.
+
+        Zero before the record starts, and a last channel of ones.
+        """
         n0 = self._n0
         near = np.zeros((len(self._signals) + 1, 2 * n0))  # near[ch, m] = u_ch(lo - N0 + m)
         skip = max(n0 - lo, 0)
@@ -182,7 +185,8 @@ class LagCorrelations:
         near[-1] = 1.0
         return near[:, _edge_index(n0)]
 
-    def _walk(self, prefixes, lo: int, hi: int, root: np.ndarray | None = None):
+    def _walk(self, prefixes: Iterable[tuple[tuple[int, int], ...]], lo: int, hi: int,
+              root: np.ndarray | None = None) -> Iterator[tuple[tuple, np.ndarray | None]]:
         """Yield ``(prefix, product)`` over ``t = lo..hi-1`` for each prefix, in sorted order.
 
         Partial products start from ``root`` and are shared depth-first;
@@ -203,9 +207,9 @@ class LagCorrelations:
                 stack.append((prefix[: depth + 1], prod))
             yield prefix, stack[-1][1]
 
-    def _add_shapes(self, batch: Batch) -> None:
+    def _add_shapes(self, batch: Batch, new: NewShapes) -> None:
         """Tabulate the batch's new shapes: their sum over the window and near each end."""
-        n, n0, new = self._n, self._n0, batch.new
+        n, n0 = self._n, self._n0
         sums = np.empty(len(new.ch))
         # the product of each group's leading factors over the window, shared depth-first
         for prefix, prefix_product in self._walk(new.groups, n0, n):
@@ -225,8 +229,10 @@ class LagCorrelations:
     def _lagged_sums(
         self, weight: np.ndarray | None, ch: int, k: int, rels: np.ndarray,
     ) -> np.ndarray:
-        """``sum_t weight(t) u_ch(t - rel)^k`` over the window for each ``rel`` (ascending;
-        ``weight`` None: ones).  ``weight`` is the product of the moment's other factors.
+        """Return ``sum_t weight(t) u_ch(t - rel)^k`` over the window for each ``rel``.
+
+        ``rel`` ascending; ``weight`` None: ones.  ``weight`` is the product of the
+        moment's other factors.
 
         Several lags of one signal are one correlation (a dot product per lag
         in C) when they fill at least half of their range.
@@ -247,16 +253,20 @@ class LagCorrelations:
         return np.correlate(series, weight, "valid")[hi - rels]
 
     def _product(self, ch: np.ndarray, lag: np.ndarray) -> np.ndarray:
-        """The product of the factors (channel, lag) over the window, a new array."""
+        """Return the product of the factors (channel, lag) over the window, a new array."""
         out = np.ones(self.n_samples)
         for c, k in zip(ch.tolist(), lag.tolist()):
             if c >= 0:
                 out *= self._factor(c, k, self._n0, self._n)
         return out
 
-    def _direct_sums(self, ch, lag, weight):
-        """Sum each row's product times ``weight`` over the window, sharing partial products
-        and summing the lags of a row's last factor as one correlation where they are dense."""
+    def _direct_sums(self, ch: np.ndarray, lag: np.ndarray,
+                     weight: np.ndarray | None) -> np.ndarray:
+        """Sum each row's product times ``weight`` over the window.
+
+        Partial products are shared, and the lags of a row's last factor are summed as one
+        correlation where they are dense.
+        """
         if weight is not None and self._use_gram(ch, lag):
             return self._weighted_gram_sums(ch, lag, weight)
         groups = direct_groups(ch, lag)
@@ -281,7 +291,8 @@ class LagCorrelations:
         n_factors = len(np.unique(ch[:, :2] * self._geometry.stride + lag[:, :2]))
         return 4 * len(ch) >= n_factors**2
 
-    def _weighted_gram_sums(self, ch, lag, weight: np.ndarray) -> np.ndarray:
+    def _weighted_gram_sums(self, ch: np.ndarray, lag: np.ndarray,
+                            weight: np.ndarray) -> np.ndarray:
         """``sum_t w(t) u_a(t - l_a) u_b(t - l_b)`` over the window for each row's two factors.
 
         The entries of the weighted Gram matrix ``X' diag(w) X`` of the rows'
@@ -319,4 +330,5 @@ class PooledCorrelations:
         self.diag = sum(w * p.diag for w, p in zip(self._w, parts))
 
     def column(self, j: int) -> np.ndarray:
+        """Return Gram column ``j``: the parts' columns, weighted by their samples."""
         return sum(w * p.column(j) for w, p in zip(self._w, self._parts))

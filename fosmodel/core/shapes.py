@@ -54,6 +54,7 @@ class Geometry:
     radix: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        """Set the radix: as many digits of a key's base as fit in an int64."""
         base, digits = self.n_channels * self.stride + 1, self.width
         while digits > self.table_degree and base**digits >= 2**62:
             digits -= 1
@@ -61,11 +62,16 @@ class Geometry:
 
     @property
     def stride(self) -> int:
+        """Codes per channel: one per lag shift ``0 .. n0``."""
         return self.n0 + 1
 
-    def shape_keys(self, ch, lag, present, lmin) -> tuple[np.ndarray, np.ndarray]:
-        """Integer key of each row's shape (negative where it has too many factors to
-        encode) and the row's sorted codes (absent factors first)."""
+    def shape_keys(self, ch: np.ndarray, lag: np.ndarray, present: np.ndarray,
+                   lmin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return the integer key of each row's shape and the row's sorted codes.
+
+        A key is negative where the row has too many factors to encode; absent factors
+        come first among the codes.
+        """
         code = ch * self.stride + (lag - lmin[:, None] + 1)
         code[~present] = 0
         code.sort(axis=1)
@@ -77,8 +83,10 @@ class Geometry:
         return np.where(fits, code @ self.radix, -1 - np.arange(len(code))), code
 
     def group_by_prefix(self, codes: np.ndarray) -> dict[tuple, dict[tuple, tuple]]:
-        """Shapes grouped by their factors but the last (its square if it repeats), then by
-        the last factor's channel and power: ``{prefix: {(ch, k): (rows, rels)}}``.
+        """Group shapes by their factors but the last, then by the last factor's channel and power.
+
+        The prefix leaves out the last factor's square if it repeats:
+        ``{prefix: {(ch, k): (rows, rels)}}``.
 
         A prefix is a tuple of ``(channel, lag shift)`` factors; ``rels`` are the
         last factor's lag shifts, ascending; channel -1 is the empty product.
@@ -105,8 +113,10 @@ class Geometry:
         return groups
 
     def factor_index(self, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(channel, lag shift) of every code; an absent factor is channel ``n_channels``
-        (the ones of the edge tables) at shift 0."""
+        """Return the (channel, lag shift) of every code.
+
+        An absent factor is channel ``n_channels`` (the ones of the edge tables) at shift 0.
+        """
         ch, rel = np.divmod(codes - 1, self.stride)
         ch[codes == 0], rel[codes == 0] = self.n_channels, 0
         return ch, rel
@@ -141,12 +151,14 @@ class Batch:
     slots: np.ndarray  # their table rows
 
 
-def plan_batch(geo: Geometry, ch, lag, lmin, table_keys, table_slots) -> Batch:
-    """Which rows come from the tables, and which shapes the batch tabulates first.
+def plan_batch(geo: Geometry, ch: np.ndarray, lag: np.ndarray, lmin: np.ndarray | None,
+               table_keys: np.ndarray, table_slots: np.ndarray) -> Batch:
+    """Plan which rows come from the tables, and which shapes the batch tabulates first.
 
     A product comes from the tables if its degree is at most
     ``geo.table_degree``, or if its shape is already tabulated or repeats
-    within the batch; otherwise it is summed directly.
+    within the batch; otherwise it is summed directly.  ``lmin`` (each row's smallest lag)
+    is computed from the rows when None.
     """
     present = ch >= 0
     degree = present.sum(axis=1)
@@ -196,22 +208,27 @@ class FirstRows:
 
     @property
     def means(self) -> slice:
+        """Rows of mean(p_c), one per candidate."""
         return self._block(0)
 
     @property
     def target(self) -> slice:
+        """Rows of mean(y p_c), one per candidate."""
         return self._block(1)
 
     @property
     def diag(self) -> slice:
+        """Rows of mean(p_c^2), one per candidate."""
         return self._block(2)
 
     @property
     def columns(self) -> slice:
+        """Rows of the tabulated linear candidates' Gram columns, ``n_candidates`` each."""
         return slice(self.diag.stop, self.n_rows)
 
     @property
     def n_rows(self) -> int:
+        """Number of rows of the first batch."""
         return 2 + (3 + self.n_linear) * self.n_candidates
 
 
@@ -238,7 +255,7 @@ class Layout:
 
 @lru_cache(maxsize=16)
 def layout(factors: tuple[tuple[Factor, ...], ...], n0: int, table_degree: int) -> Layout:
-    """The layout of the candidates with these factors (one tuple per candidate).
+    """Lay out the candidates with these factors (one tuple per candidate).
 
     The first batch holds, in order (:class:`FirstRows`): mean(y), mean(y^2),
     mean(p_c), mean(y p_c), mean(p_c^2) for every candidate c, then the Gram
@@ -286,7 +303,7 @@ def _arrays(batch: Batch) -> list[np.ndarray]:
 
 
 def _linear_rows(ch: np.ndarray, lag: np.ndarray, table_degree: int):
-    """The linear candidates whose Gram columns are tabulated at once, and their rows.
+    """Return the linear candidates whose Gram columns are tabulated at once, and their rows.
 
     A linear candidate's column holds moments of degree at most width + 1,
     all table lookups when that is within ``table_degree``; while all those
@@ -326,8 +343,9 @@ def direct_groups(ch: np.ndarray, lag: np.ndarray) -> dict[tuple, dict[tuple, tu
 
 @lru_cache(maxsize=4096)
 def _direct_groups(ch_bytes: bytes, lag_bytes: bytes, shape: tuple[int, int]) -> dict:
-    ch = np.frombuffer(ch_bytes, dtype=np.int64).reshape(shape)
-    lag = np.frombuffer(lag_bytes, dtype=np.int64).reshape(shape)
+    # reshape(rows, columns): numpy's stubs take reshape(shape) of a tuple for a 0-d array
+    ch = np.frombuffer(ch_bytes, dtype=np.int64).reshape(shape[0], shape[1])
+    lag = np.frombuffer(lag_bytes, dtype=np.int64).reshape(shape[0], shape[1])
     groups: dict[tuple, dict[tuple, tuple[list, list]]] = {}
     for i, (r_ch, r_lag) in enumerate(zip(ch.tolist(), lag.tolist())):
         row = sorted((c, g) for c, g in zip(r_ch, r_lag) if c >= 0)
