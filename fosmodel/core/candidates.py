@@ -327,8 +327,8 @@ def evaluate_terms(
 
 
 def evaluate_sum(
-    terms: Sequence[Term], weights: Sequence[float], signals: Mapping[str, np.ndarray],
-    start: int,
+    terms: Sequence[Term], weights: Sequence[float] | np.ndarray,
+    signals: Mapping[str, np.ndarray], start: int,
 ) -> np.ndarray:
     """``evaluate_terms(terms, signals, start) @ weights``, without the term matrix.
 

@@ -92,7 +92,7 @@ class Expansion:
 
 
 def split_expansion(
-    terms: Sequence[Term], coef: Sequence[float], intercept: float, max_lag: int,
+    terms: Sequence[Term], coef: Sequence[float] | np.ndarray, intercept: float, max_lag: int,
     level_names: Sequence[str], rate: float | None,
 ) -> Expansion:
     """Split a fitted model's terms for its free runs."""

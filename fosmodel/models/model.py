@@ -19,10 +19,12 @@ import copy
 import logging
 import math
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from typing import Any, TypeAlias
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 from sklearn.base import BaseEstimator
 
 from .._version import __version__
@@ -40,13 +42,13 @@ from ..core.candidates import (
 from ..core.correlations import LagCorrelations, PooledCorrelations
 from ..core.derived import channels_read, derive, is_derived
 from ..core.exceptions import FitWarning, InputError
-from ..core.fos import DataCorrelations, StopRule, center, criterion, fos_search
+from ..core.fos import Correlations, DataCorrelations, StopRule, center, criterion, fos_search
 from ..core.levels import (
     check_level_rate,
     check_level_series,
+    checked_level_tau,
     level_after,
     level_series,
-    level_tau,
     with_levels,
 )
 from ..core.validation import as_channels, as_signal, check_fitted
@@ -72,24 +74,27 @@ FORMAT_VERSION = 2
 _ADDED_IN = {2: {"coef_se": lambda n_terms: [math.nan] * n_terms,
                  "intercept_se": lambda n_terms: math.nan}}
 _BYTES_PER_VALUE = 8
+#: The channels and columns of a record, by name: a dict of arrays or a DataFrame.
+Exog: TypeAlias = Mapping[str, ArrayLike] | pd.DataFrame
 
 
-def _floats(values: object) -> list[float]:
+def _floats(values: Iterable[float]) -> list[float]:
     return [float(v) for v in values]
 
 
-def _float_array(values: object) -> np.ndarray:
+def _float_array(values: ArrayLike) -> np.ndarray:
     return np.asarray(values, dtype=float)
 
 
-def _float_dict(values: Mapping[object, object]) -> dict[str, float]:
+def _float_dict(values: Mapping[str, float]) -> dict[str, float]:
     return {str(k): float(v) for k, v in values.items()}
 
 
 #: The fitted state beside the terms, their weights and the intercept, declared once: each
 #: name (an attribute ``name_``) with how it is written to JSON and read back, for
 #: :meth:`FOSModel.fit`, :meth:`FOSModel.to_dict` and :meth:`FOSModel.from_dict` alike.
-_FITTED_STATE: dict[str, tuple[Callable[[object], object], Callable[[object], object]]] = {
+#: The values are JSON or numpy values of each name's own type, hence ``Any``.
+_FITTED_STATE: dict[str, tuple[Callable[[Any], object], Callable[[Any], object]]] = {
     "offsets": (_float_dict, _float_dict),
     "coef_se": (_floats, _float_array),
     "intercept_se": (float, float),
@@ -223,7 +228,7 @@ class FOSModel(BaseEstimator):
     # -- fitting -------------------------------------------------------------------------
 
     def candidate_spec(self) -> CandidateSpec:
-        """The candidate set these parameters offer (checked; nothing is fitted).
+        """Return the candidate set these parameters offer (checked; nothing is fitted).
 
         Raises
         ------
@@ -236,7 +241,7 @@ class FOSModel(BaseEstimator):
         return spec
 
     def fit(
-        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        self, y: ArrayLike, exog: Exog | None = None,
         segments: Sequence[slice] | None = None,
     ) -> FOSModel:
         """Select terms and weights on the record ``y`` (and its exogenous channels).
@@ -294,6 +299,7 @@ class FOSModel(BaseEstimator):
             signals.update(self._given_levels(exog, y_arr, offsets[OUTPUT]))
         terms = [t for t in generate_terms(spec) if not t.is_constant]
         pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, spec) for s in runs]
+        corr: Correlations
         if self.correlations == "fast":
             with one_blas_thread():  # short products: threads cost more than they give
                 parts = [LagCorrelations(terms, piece, n0) for piece in pieces]
@@ -321,7 +327,7 @@ class FOSModel(BaseEstimator):
         return self
 
     def _thin(self) -> str | None:
-        """A note when the fitting window holds few samples per weight, else None."""
+        """Return a note when the fitting window holds few samples per weight, else None."""
         weights = len(self.terms_) + 1
         if self.n_samples_ >= _SAMPLES_PER_WEIGHT * weights:
             return None
@@ -329,24 +335,44 @@ class FOSModel(BaseEstimator):
                 f"{weights - 1} term(s)), fewer than {_SAMPLES_PER_WEIGHT} each: the weights "
                 "are rough; fit a longer record before relying on them")
 
-    def _with_levels(self, signals: dict[str, np.ndarray], spec: CandidateSpec):
-        """``signals`` (centred, one contiguous run) with the levels of its output added
-        (those not there already)."""
-        missing = [name for name in spec.level_names if name not in signals]
-        return with_levels(signals, missing, self.rate, OUTPUT)
+    def _level_rate(self) -> float:
+        """Return the sample rate that levels and rebuilt columns are computed at.
 
-    def _given_levels(self, exog: object, y: np.ndarray, mu: float,
+        Raises
+        ------
+        InputError
+            The model has no ``rate``.
+        """
+        if self.rate is None:
+            raise InputError("levels and rebuilt columns need the sample rate (rate=...)")
+        return self.rate
+
+    def _with_levels(self, signals: dict[str, np.ndarray],
+                     spec: CandidateSpec) -> dict[str, np.ndarray]:
+        """Add the levels of the output (those not there already) to ``signals``.
+
+        ``signals`` are centred and one contiguous run.
+        """
+        missing = [name for name in spec.level_names if name not in signals]
+        if not missing:
+            return dict(signals)
+        return with_levels(signals, missing, self._level_rate(), OUTPUT)
+
+    def _given_levels(self, exog: Exog | None, y: np.ndarray, mu: float,
                       lo: int = 0) -> dict[str, np.ndarray]:
-        """Level series passed in ``exog`` (of the raw output), checked, centred by ``mu``,
-        from sample ``lo`` on."""
+        """Return the level series passed in ``exog`` (of the raw output), checked.
+
+        They are centred by ``mu`` and cut from sample ``lo`` on.
+        """
         if exog is None:
             return {}
         names = [n for n in self.candidate_spec().level_names if n in set(map(str, exog.keys()))]
-        return {n: check_level_series(exog[n], y, level_tau(n), self.rate, n)[lo:] - mu
+        return {n: check_level_series(np.asarray(exog[n], dtype=float), y, checked_level_tau(n),
+                                      self._level_rate(), n)[lo:] - mu
                 for n in names}
 
     def _set_state(self, values: Mapping[str, object]) -> None:
-        """The fitted state of :data:`_FITTED_STATE` (each ``name`` as ``name_``), all of it."""
+        """Set the fitted state of :data:`_FITTED_STATE` (each ``name`` as ``name_``), all of it."""
         if set(values) != set(_FITTED_STATE):
             raise InputError(f"fitted state {sorted(values)} is not {sorted(_FITTED_STATE)}")
         for name, (_, load) in _FITTED_STATE.items():
@@ -378,7 +404,8 @@ class FOSModel(BaseEstimator):
     def _check_fitted(self) -> None:
         check_fitted(self, "terms_")
 
-    def _signals(self, y: object, exog: object, levels: bool = True) -> dict[str, np.ndarray]:
+    def _signals(self, y: ArrayLike, exog: Exog | None,
+                 levels: bool = True) -> dict[str, np.ndarray]:
         """Centred output and inputs, with the level series given in ``exog`` if ``levels``."""
         y_arr = as_signal(y, "y")
         channels = self._inputs(exog, len(y_arr))
@@ -387,12 +414,15 @@ class FOSModel(BaseEstimator):
             signals.update(self._given_levels(exog, y_arr, self.offsets_[OUTPUT]))
         return signals
 
-    def _inputs(self, exog: object, n: int, lo: int = 0) -> dict[str, np.ndarray]:
-        """The channels and columns of a fitted model over samples ``lo .. n-1``: given in
-        ``exog`` (``n`` long), or rebuilt from their names (:mod:`fosmodel.core.derived`)."""
+    def _inputs(self, exog: Exog | None, n: int, lo: int = 0) -> dict[str, np.ndarray]:
+        """Return the channels and columns of a fitted model over samples ``lo .. n-1``.
+
+        Each is given in ``exog`` (``n`` long), or rebuilt from its name
+        (:mod:`fosmodel.core.derived`).
+        """
         spec = self.spec_
         names = [*spec.exog_lags, *spec.columns]
-        given = set(map(str, exog.keys())) if exog is not None else set()
+        given: set[str] = set(map(str, exog.keys())) if exog is not None else set()
         rebuilt = [c for c in names if c not in given and is_derived(c)]
         if rebuilt and self.rate is None:
             raise InputError(f"{rebuilt[0]!r} can be rebuilt only with the model's sample rate "
@@ -402,12 +432,14 @@ class FOSModel(BaseEstimator):
         if rebuilt:
             source = as_channels(exog, channels_read(rebuilt), n)
             for name in rebuilt:
-                channels[name] = derive(name, n, self.rate, source, self.offsets_)[lo:]
+                channels[name] = derive(name, n, self._level_rate(), source, self.offsets_)[lo:]
         return channels
 
-    def _signals_from(self, y: object, exog: object, lo: int) -> dict[str, np.ndarray]:
-        """Centred output, inputs and levels over samples ``lo ..`` of the record ``y`` (the
-        levels from its whole past: given in ``exog``, or computed)."""
+    def _signals_from(self, y: ArrayLike, exog: Exog | None, lo: int) -> dict[str, np.ndarray]:
+        """Return the centred output, inputs and levels over samples ``lo ..`` of ``y``.
+
+        The levels come from the record's whole past: given in ``exog``, or computed.
+        """
         y_arr = as_signal(y, "y")
         n = len(y_arr)
         channels = self._inputs(exog, n, lo)
@@ -418,13 +450,16 @@ class FOSModel(BaseEstimator):
             given = self._given_levels(exog, y_arr, mu, lo)
             missing = [name for name in self.spec_.level_names if name not in given]
             for name in missing:  # of the raw output: a level of y - mu is its level - mu
-                given[name] = level_series(y_arr, level_tau(name), self.rate)[lo:] - mu
+                given[name] = (level_series(y_arr, checked_level_tau(name), self._level_rate())
+                               [lo:] - mu)
             signals.update(given)
         return signals
 
     def input_columns(self) -> list[str]:
-        """The record columns this fitted model reads besides its output (inputs it cannot
-        rebuild, and the channels those it rebuilds come from)."""
+        """Return the record columns this fitted model reads besides its output.
+
+        These are the inputs it cannot rebuild, and the channels those it rebuilds come from.
+        """
         self._check_fitted()
         names = [*self.spec_.exog_lags, *self.spec_.columns]
         rebuilt = [c for c in names if is_derived(c)] if self.rate is not None else []
@@ -435,9 +470,9 @@ class FOSModel(BaseEstimator):
         return {OUTPUT: self.offsets_[OUTPUT], **{k: self.offsets_[k] for k in channels}}
 
     def predict(
-        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        self, y: ArrayLike, exog: Exog | None = None,
         segments: Sequence[slice] | None = None, *, start: int = 0,
-    ):
+    ) -> np.ndarray | pd.Series:
         """One-step-ahead prediction from the true past, aligned with ``y``.
 
         Sample ``n`` is predicted from ``y[n-1], y[n-2], ...`` and the channels
@@ -473,16 +508,16 @@ class FOSModel(BaseEstimator):
             return pd.Series(out, index=y.index, name="prediction")
         return out
 
-    def residuals(self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None):
-        """``y`` minus its one-step prediction (NaN over the lag window)."""
+    def residuals(self, y: ArrayLike, exog: Exog | None = None) -> np.ndarray | pd.Series:
+        """Return ``y`` minus its one-step prediction (NaN over the lag window)."""
         pred = self.predict(y, exog)
         return (y - pred) if isinstance(pred, pd.Series) else as_signal(y, "y") - pred
 
     def refit_weights(
-        self, y: object, exog: Mapping[str, object] | pd.DataFrame | None = None,
+        self, y: ArrayLike, exog: Exog | None = None,
         segments: Sequence[slice] | None = None,
     ) -> FOSModel:
-        """A copy with the selected terms' weights fitted anew on ``y`` (least squares).
+        """Return a copy with the selected terms' weights fitted anew on ``y`` (least squares).
 
         The terms, the candidate set and the centring offsets stay; terms that
         are numerically dependent on ``y`` (a step after its end, say) are
@@ -521,8 +556,10 @@ class FOSModel(BaseEstimator):
         self._check_fitted()
         a = np.zeros(self.spec_.max_lag)
         for term, c in zip(self._terms, self.coef_):
-            if term.degree == 1 and term.factors[0][0] == OUTPUT:
-                a[term.factors[0][1] - 1] = c
+            if term.degree == 1:
+                channel, lag = term.factors[0]
+                if channel == OUTPUT and lag is not None:
+                    a[lag - 1] = c
         return a
 
     def ar_roots(self) -> np.ndarray:
@@ -541,10 +578,10 @@ class FOSModel(BaseEstimator):
 
     def simulate(
         self,
-        y_init: object,
+        y_init: ArrayLike,
         n_steps: int,
-        exog: Mapping[str, object] | pd.DataFrame | None = None,
-        noise: object | None = None,
+        exog: Exog | None = None,
+        noise: ArrayLike | None = None,
     ) -> np.ndarray:
         """Free run: continue ``y_init`` for ``n_steps`` samples from the model's own output.
 
@@ -594,25 +631,27 @@ class FOSModel(BaseEstimator):
                 out = ar_free_run(ex.phi, signals[OUTPUT][:n0], drive)
         return cut_at_divergence(out) + self.offsets_[OUTPUT]
 
-    def _levels_after(self, y0: np.ndarray, exog: object) -> np.ndarray:
-        """The centred levels at the first sample after ``y0`` (from series given in ``exog``
-        over the past and the run, or computed from ``y0``)."""
+    def _levels_after(self, y0: np.ndarray, exog: Exog | None) -> np.ndarray:
+        """Return the centred levels at the first sample after ``y0``.
+
+        From the series given in ``exog`` over the past and the run, or computed from ``y0``.
+        """
         mu, out = self.offsets_[OUTPUT], []
-        given = set(map(str, exog.keys())) if exog is not None else set()
+        given: Exog = exog if exog is not None else {}
         for name in self.spec_.level_names:
-            tau = level_tau(name)
+            tau, rate = checked_level_tau(name), self._level_rate()
             if name in given:
-                past = check_level_series(np.asarray(exog[name], dtype=float)[: len(y0)], y0,
-                                          tau, self.rate, name)
-                a = 1.0 / (tau * self.rate)
+                past = check_level_series(np.asarray(given[name], dtype=float)[: len(y0)], y0,
+                                          tau, rate, name)
+                a = 1.0 / (tau * rate)
                 out.append((1.0 - a) * past[-1] + a * y0[-1] - mu)
             else:
-                out.append(level_after(y0 - mu, tau, self.rate))
+                out.append(level_after(y0 - mu, tau, rate))
         return np.array(out)
 
     def free_runs(
-        self, y: object, starts: Sequence[int], n_steps: int,
-        exog: Mapping[str, object] | pd.DataFrame | None = None,
+        self, y: ArrayLike, starts: Sequence[int], n_steps: int,
+        exog: Exog | None = None,
     ) -> np.ndarray:
         """Free runs of ``n_steps`` samples from the true past ``y[:s]``, each ``s`` in ``starts``.
 
@@ -625,7 +664,7 @@ class FOSModel(BaseEstimator):
         ndarray of shape (len(starts), n_steps)
         """
         self._check_fitted()
-        n, n0 = len(y), self.lag_window_
+        n, n0 = len(as_signal(y, "y")), self.lag_window_
         s = np.asarray(starts, dtype=np.int64).reshape(-1)
         if not s.size:
             return np.empty((0, n_steps))
@@ -649,7 +688,7 @@ class FOSModel(BaseEstimator):
     # -- reporting and persistence -------------------------------------------------------
 
     def summary(self) -> Summary:
-        """Term, weight, MSE reduction Q and share of the variance explained."""
+        """Summarise the fit: each term, its weight, MSE reduction Q and share of the variance."""
         self._check_fitted()
         null = self.mse_null_
         share = 100.0 * self.q_ / null if null > 0 else np.zeros_like(self.q_)
@@ -720,7 +759,7 @@ class FOSModel(BaseEstimator):
         }
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, object]) -> FOSModel:
+    def from_dict(cls, data: Mapping[str, Any]) -> FOSModel:
         """Rebuild a fitted model from :meth:`to_dict` output.
 
         Raises
@@ -760,7 +799,7 @@ class FOSModel(BaseEstimator):
         return model
 
     def raw_coefficients(self) -> dict[str, float]:
-        """The fitted model written in the raw signals: term name -> weight, ``"1"`` first.
+        """Return the fitted model written in the raw signals: term name -> weight, ``"1"`` first.
 
         The products of centred factors ``z - mu`` multiplied out into raw monomials
         (:mod:`fosmodel.models.rawform`), ``mu_y`` moved into the constant; the raw form
@@ -773,13 +812,13 @@ class FOSModel(BaseEstimator):
 
 
 def _older_state(version: int, fitted: Mapping[str, object], n_terms: int) -> dict[str, object]:
-    """The fitted state a file of format ``version`` lacks, as it reads there."""
+    """Return the fitted state a file of format ``version`` lacks, as it reads there."""
     return {name: default(n_terms) for added, names in _ADDED_IN.items() if version < added
             for name, default in names.items() if name not in fitted}
 
 
-def _cut(exog: object, names: Sequence[str], n: int, lo: int) -> dict[str, object] | None:
-    """``exog``'s channels ``names`` from sample ``lo`` on (their lengths checked against n)."""
+def _cut(exog: Exog | None, names: Sequence[str], n: int, lo: int) -> Exog | None:
+    """Return ``exog``'s channels ``names`` from sample ``lo`` on (lengths checked against n)."""
     if exog is None or not names:
         return exog
     out = {}
@@ -792,8 +831,8 @@ def _cut(exog: object, names: Sequence[str], n: int, lo: int) -> dict[str, objec
     return out or exog
 
 
-def _rest(term: Term | None, signals: Mapping[str, np.ndarray], start: int):
-    """A nonlinear term's input factors over the simulated samples (None: it has none)."""
+def _rest(term: Term | None, signals: Mapping[str, np.ndarray], start: int) -> np.ndarray | None:
+    """Return a nonlinear term's input factors over the simulated samples (None: it has none)."""
     return None if term is None else evaluate_sum([term], [1.0], signals, start)
 
 
@@ -806,8 +845,10 @@ def _refuse_own_input(y: np.ndarray, channels: Mapping[str, np.ndarray]) -> None
 
 
 def _usable(segments: Sequence[slice] | None, n: int, n0: int) -> list[slice]:
-    """The runs of samples to use: ``segments`` (checked) or the whole record, each longer
-    than the lag window."""
+    """Return the runs of samples to use: ``segments`` (checked) or the whole record.
+
+    Each run kept is longer than the lag window.
+    """
     if segments is None:
         return [slice(0, n)] if n > n0 else []
     runs, last = [], 0

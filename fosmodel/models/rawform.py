@@ -30,7 +30,7 @@ from ..core.levels import is_level
 
 
 def expand_centred(
-    terms: Sequence[Term], coef: Sequence[float], intercept: float,
+    terms: Sequence[Term], coef: Sequence[float] | np.ndarray, intercept: float,
     offsets: Mapping[str, float],
 ) -> dict[Term, float]:
     """Return the weights of the raw monomials of a centred expansion.
