@@ -26,21 +26,29 @@ from numbers import Integral
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import _check_feature_names_in, validate_data
 
-from ..core.candidates import OUTPUT, CandidateSpec, Term, evaluate_terms, generate_terms
+from ..core.candidates import (
+    OUTPUT,
+    CandidateSpec,
+    Factor,
+    Term,
+    evaluate_terms,
+    generate_terms,
+)
 from ..core.exceptions import InputError
 from ..core.levels import is_level
 from ..core.validation import as_channels, as_signal, check_fitted
 
 
 def lagged_rows(
-    y: object, exog: Mapping[str, object] | pd.DataFrame | None = None, *, max_lag: int,
+    y: ArrayLike, exog: Mapping[str, ArrayLike] | pd.DataFrame | None = None, *, max_lag: int,
     exog_lags: Mapping[str, int] | None = None,
 ) -> tuple[pd.DataFrame, pd.Series]:
-    """A record as rows of lagged values and the target aligned with them.
+    """Cut a record into rows of lagged values, and the target aligned with them.
 
     Parameters
     ----------
@@ -144,7 +152,7 @@ class NARXFeatures(TransformerMixin, BaseEstimator):
         self.center = center
 
     @_fit_context(prefer_skip_nested_validation=True)
-    def fit(self, X, y=None) -> NARXFeatures:
+    def fit(self, X: ArrayLike, y: object = None) -> NARXFeatures:
         """Choose the candidates and learn the channel means from the rows ``X``.
 
         Raises
@@ -153,7 +161,7 @@ class NARXFeatures(TransformerMixin, BaseEstimator):
             A column that is not a lagged value, the output at ``n`` itself, or a
             lagged value the candidates need missing from ``X``.
         """
-        X = validate_data(self, X, dtype=np.float64)
+        X_checked = validate_data(self, X, dtype=np.float64)
         given = {factor: j for j, factor in enumerate(self._factors_in())}
         lags = _lags_by_channel(given)
         exog_lags = self.exog_lags if self.exog_lags is not None else {
@@ -170,12 +178,13 @@ class NARXFeatures(TransformerMixin, BaseEstimator):
         self.spec_ = spec
         self._columns = given
         self._terms = generate_terms(spec)
-        self.offsets_ = {ch: float(X[:, given[(ch, lag[0])]].mean()) if self.center else 0.0
+        self.offsets_ = {ch: float(X_checked[:, given[(ch, lag[0])]].mean()) if self.center
+                         else 0.0
                          for ch, lag in _lags_by_channel(spec.base_factors()).items()}
         return self
 
     def _factors_in(self) -> list[tuple[str, int]]:
-        """The lagged value each column of ``X`` holds, read from its name."""
+        """Return the lagged value each column of ``X`` holds, read from its name."""
         if not hasattr(self, "feature_names_in_"):
             return [(OUTPUT, lag) for lag in range(1, self.n_features_in_ + 1)]
         factors = []
@@ -186,25 +195,26 @@ class NARXFeatures(TransformerMixin, BaseEstimator):
             factors.append(factor)
         return factors
 
-    def transform(self, X) -> np.ndarray:
-        """The candidate columns of the rows ``X``, in the order of :meth:`get_feature_names_out`.
+    def transform(self, X: ArrayLike) -> np.ndarray:
+        """Return the candidate columns of the rows ``X``, as :meth:`get_feature_names_out` orders.
 
         Returns
         -------
         ndarray of shape (n_rows, n_candidates)
         """
         check_fitted(self, "spec_")
-        X = validate_data(self, X, reset=False, dtype=np.float64)
-        values = {factor: X[:, j] - self.offsets_[factor[0]]
-                  for factor, j in self._columns.items() if factor[0] in self.offsets_}
-        out = np.ones((X.shape[0], len(self._terms)))
+        X_checked = validate_data(self, X, reset=False, dtype=np.float64)
+        values: dict[Factor, np.ndarray] = {
+            factor: X_checked[:, j] - self.offsets_[factor[0]]
+            for factor, j in self._columns.items() if factor[0] in self.offsets_}
+        out = np.ones((X_checked.shape[0], len(self._terms)))
         for j, term in enumerate(self._terms):
             for factor in term.factors:
                 out[:, j] *= values[factor]
         return out
 
-    def get_feature_names_out(self, input_features=None) -> np.ndarray:
-        """The candidates' names, e.g. ``y[n-1]``, ``y[n-1]*x[n-2]``, ``y[n-2]^2``.
+    def get_feature_names_out(self, input_features: ArrayLike | None = None) -> np.ndarray:
+        """Return the candidates' names, e.g. ``y[n-1]``, ``y[n-1]*x[n-2]``, ``y[n-2]^2``.
 
         ``input_features`` is only checked against the columns seen in fit: the
         names are those of the candidates, fixed by fit.
@@ -215,23 +225,29 @@ class NARXFeatures(TransformerMixin, BaseEstimator):
 
 
 def _lagged_factor(name: str) -> tuple[str, int]:
-    """``(channel, lag)`` of a column named like ``y[n-1]`` or ``x[n-0]``."""
+    """Return ``(channel, lag)`` of a column named like ``y[n-1]`` or ``x[n-0]``."""
     try:
         factors = Term.parse(name).factors
     except InputError:
         factors = ()
-    if len(factors) != 1 or factors[0][1] is None or is_level(factors[0][0]):
-        raise InputError(f"column {name!r} of X is not a lagged value such as 'y[n-1]' or "
-                         "'x[n-0]'")
-    if factors[0] == (OUTPUT, 0):
-        raise InputError(f"column {name!r} of X is the output at n, the value predicted; "
-                         "give its lags from 1 on")
-    return factors[0]
+    if len(factors) == 1:
+        channel, lag = factors[0]
+        if lag is not None and not is_level(channel):
+            if (channel, lag) == (OUTPUT, 0):
+                raise InputError(f"column {name!r} of X is the output at n, the value "
+                                 "predicted; give its lags from 1 on")
+            return channel, lag
+    raise InputError(f"column {name!r} of X is not a lagged value such as 'y[n-1]' or "
+                     "'x[n-0]'")
 
 
-def _lags_by_channel(factors: Iterable[tuple[str, int]]) -> dict[str, list[int]]:
-    """The lags of each channel among ``factors``, smallest (newest) first."""
+def _lags_by_channel(factors: Iterable[Factor]) -> dict[str, list[int]]:
+    """Return the lags of each channel among ``factors``, smallest (newest) first.
+
+    A user column (no lag) has none.
+    """
     lags: dict[str, list[int]] = {}
     for ch, lag in factors:
-        lags.setdefault(ch, []).append(lag)
+        if lag is not None:
+            lags.setdefault(ch, []).append(lag)
     return {ch: sorted(values) for ch, values in lags.items()}
