@@ -1,5 +1,7 @@
-"""The record the loader returns: validated columns, their sample rate and time, and
-what the loader found (:func:`fosmodel.io.loader.load_record` builds it)."""
+"""The record the loader returns: validated columns, their sample rate and time.
+
+Beside them, what the loader found (:func:`fosmodel.io.loader.load_record` builds it).
+"""
 
 from __future__ import annotations
 
@@ -59,10 +61,12 @@ class Record:
 
     @property
     def n_samples(self) -> int:
+        """Number of samples of every column."""
         return len(next(iter(self.data.values())))
 
     @property
     def names(self) -> list[str]:
+        """The column names, in the record's order."""
         return list(self.data)
 
     def column(self, name: str) -> np.ndarray:
@@ -75,6 +79,13 @@ class Record:
         return self.data[name]
 
     def require_rate(self) -> float:
+        """Return the sample rate in Hz.
+
+        Raises
+        ------
+        InputError
+            The record has no time column and was given no rate.
+        """
         if self.rate is None:
             raise InputError(f"{self.source}: no time column; give the sample rate with --rate HZ")
         return self.rate

@@ -80,6 +80,7 @@ def read_bag(path: Path, topic: str | None = None,
     if not imus:
         raise no_imu_topic(src, IMU_TYPE, others)
     imu = choose_topic(src, imus, topic, others)
+    assert imu is not None  # there are IMU topics: one is chosen or TopicError raised
     notes: list[str] = []
     temperature = _temperature_topic(src, found, temperature_topic, notes)
     extractors = {imu.name: _imu_row}
@@ -109,7 +110,7 @@ def read_bag(path: Path, topic: str | None = None,
 
 def _vectors(rows: np.ndarray, notes: list[str]) -> dict[str, np.ndarray]:
     """Return the columns of the IMU rows' two vectors, but of one marked as not measured."""
-    columns = {}
+    columns: dict[str, np.ndarray] = {}
     for names, first, covariance, vector in ((GYRO_COLUMNS, 2, 8, "angular_velocity"),
                                              (ACCEL_COLUMNS, 5, 9, "linear_acceleration")):
         if np.all(rows[:, covariance] == -1):
@@ -141,6 +142,7 @@ def _imu_row(msg: Any) -> tuple:
 
 
 def _temperature_row(msg: Any) -> tuple:
+    """Take the stamp and the temperature."""
     return (msg.header.stamp.sec, msg.header.stamp.nanosec, msg.temperature)
 
 
@@ -149,8 +151,11 @@ def _no_row(msg: Any) -> tuple:
 
 
 def _stamps(log_times: list[int], rows: np.ndarray) -> tuple[np.ndarray, str]:
-    """Return the messages' times in ns from the stamps (``sec``, ``nanosec``) that begin
-    ``rows``, or when every stamp is zero the times the bag recorded them; and which it is."""
+    """Return the messages' times in ns, and where they come from.
+
+    The times are the stamps (``sec``, ``nanosec``) that begin ``rows``, or when every stamp
+    is zero the times the bag recorded the messages.
+    """
     if rows[:, :2].any() or not len(rows):
         return rows[:, 0].astype(np.int64) * 10**9 + rows[:, 1].astype(np.int64), "header.stamp"
     return (np.asarray(log_times, dtype=np.int64),
@@ -181,8 +186,11 @@ def _topics(path: Path) -> dict[str, tuple[str, int]]:
 
 def _read(path: Path, extractors: Mapping[str, Callable[[Any], tuple]]
           ) -> dict[str, tuple[list[int], list[tuple]]]:
-    """Read each topic of ``extractors``: the times the bag recorded its messages (ns) and
-    what its extractor takes from each message (kept small: a bag may hold millions)."""
+    """Read each topic of ``extractors``: its messages' times (ns) and what is taken of each.
+
+    The times are those the bag recorded the messages at; the extractor takes what is kept
+    of each message (kept small: a bag may hold millions).
+    """
     out: dict[str, tuple[list[int], list[tuple]]] = {name: ([], []) for name in extractors}
     with _open(path) as reader:
         connections = [c for c in reader.connections if c.topic in extractors]

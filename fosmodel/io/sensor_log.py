@@ -1,5 +1,7 @@
-"""What the readers of robot and autopilot logs share: the topics they list, the columns
-they return, how a topic is chosen and how a temperature is set beside the IMU samples.
+"""What the readers of robot and autopilot logs share: topics, columns, choices.
+
+The topics they list, the columns they return, how a topic is chosen and how a temperature
+is set beside the IMU samples.
 
 A log (a ROS bag, a PX4 ULog) holds many topics; :mod:`fosmodel.io.rosbag` and
 :mod:`fosmodel.io.ulog` read one IMU topic of it into a :class:`SensorLog`, the

@@ -1,5 +1,6 @@
-"""Robot and autopilot logs as records: which files are logs, their IMU topics, and one
-topic read as columns.
+"""Robot and autopilot logs as records: which files are logs, their IMU topics, one read.
+
+Which files are logs, their IMU topics, and one topic read as columns.
 
 ROS 1 and ROS 2 bags (:mod:`fosmodel.io.rosbag`, the ``ros`` extra) and PX4 ULog files
 (:mod:`fosmodel.io.ulog`, the ``px4`` extra) hold many topics; :func:`imu_topics` lists

@@ -94,6 +94,7 @@ def read_ulog(path: Path, topic: str | None = None,
         raise no_imu_topic(src, ", ".join(FIELDS))
     others = {name: data.name for name, data in named.items() if data.name not in FIELDS}
     imu = choose_topic(src, imus, _canonical(src, topic, named, "topic"), others)
+    assert imu is not None  # there are IMU topics: one is chosen or TopicError raised
     data = named[imu.name]
     time, field = _time(data)
     columns = {"time": time, **_columns(src, imu.name, data)}
@@ -107,6 +108,7 @@ def read_ulog(path: Path, topic: str | None = None,
                               _canonical(src, temperature_topic, named, keyword),
                               {n: d.name for n, d in named.items() if "temperature" not in d.data},
                               "temperature", keyword)
+        assert chosen is not None  # a topic asked for is found or TopicError raised
         source = named[chosen.name]
         columns["temperature"], note = align_temperature(
             time, _time(source)[0], source.data["temperature"].astype(float), src, chosen.name)
@@ -155,8 +157,11 @@ def _named(datasets: Iterable[Any]) -> dict[str, Any]:
 
 
 def _canonical(src: str, name: str | None, named: Mapping[str, Any], keyword: str) -> str | None:
-    """Return the topic ``name`` stands for: ``NAME:0`` of a topic logged once is ``NAME``;
-    ``NAME`` of one logged in several instances is an error that lists them."""
+    """Return the topic ``name`` stands for.
+
+    ``NAME:0`` of a topic logged once is ``NAME``; ``NAME`` of one logged in several
+    instances is an error that lists them.
+    """
     base, _, instance = (name or "").partition(":")
     if name in named or name is None:
         return name
