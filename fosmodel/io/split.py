@@ -2,14 +2,20 @@
 
 The harness splits by duration (the FOS paper's 3 min + 3 min, the rest predicted), the
 residual loop by fraction; both judge a model on a segment it was not fitted on, and choose
-nothing on the prediction segment.
+nothing on the prediction segment.  :class:`SplitSpec` is a split as a user gives it, before
+the record is read: each length a duration or a percent of the record.
 """
 
 from __future__ import annotations
 
+import math
+import re
 from dataclasses import dataclass
 
 from ..core.exceptions import InputError
+
+#: Seconds in each unit of a duration; ``%`` is a percent of the record.
+_SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0}
 
 
 @dataclass(frozen=True)
@@ -63,3 +69,81 @@ class Split:
     def items(self) -> list[tuple[str, slice]]:
         """``("train", slice)``, ``("evaluate", ...)``, ``("predict", ...)``, in order."""
         return [("train", self.train), ("evaluate", self.evaluate), ("predict", self.predict)]
+
+
+@dataclass(frozen=True)
+class SplitSpec:
+    """The training and evaluation lengths of a split, each a duration or a percent.
+
+    A length is ``(value, unit)`` with ``unit`` one of ``"s"``, ``"min"``, ``"h"``
+    or ``"%"`` (of the record); :meth:`seconds` and :meth:`fractions` resolve both
+    against a record of ``n`` samples at ``rate`` Hz.
+
+    Examples
+    --------
+    >>> spec = SplitSpec.parse("3min,25%")
+    >>> spec.seconds(60_000, 100.0), spec.fractions(60_000, 100.0)
+    ((180.0, 150.0), (0.3, 0.25))
+    >>> str(spec)
+    '3min,25%'
+    """
+
+    train: tuple[float, str]
+    evaluate: tuple[float, str]
+
+    @classmethod
+    def parse(cls, text: str) -> SplitSpec:
+        """Read ``TRAIN,EVALUATE``, each with its unit: ``180s,180s`` or ``50%,20%``.
+
+        Raises
+        ------
+        InputError
+            Not two positive lengths with units (a bare number is refused: seconds or a
+            fraction?), or percents that leave nothing to predict.
+        """
+        lengths = [_length(part) for part in text.split(",")]
+        if len(lengths) != 2 or None in lengths:
+            raise InputError(f"expected TRAIN,EVALUATE with units: durations like 180s,180s "
+                             f"(s, min or h) or percents of the record like 50%,20%, got {text!r}")
+        percent = sum(value for value, unit in lengths if unit == "%")
+        if percent >= 100:
+            raise InputError(f"the split {text!r} takes {percent:g}% of the record for training "
+                             "and evaluation and leaves nothing to predict")
+        return cls(*lengths)
+
+    def seconds(self, n: int, rate: float) -> tuple[float, float]:
+        """The training and evaluation durations in a record of ``n`` samples at ``rate`` Hz."""
+        return _seconds(self.train, n, rate), _seconds(self.evaluate, n, rate)
+
+    def fractions(self, n: int, rate: float) -> tuple[float, float]:
+        """The training and evaluation fractions of a record of ``n`` samples at ``rate`` Hz.
+
+        Raises
+        ------
+        InputError
+            If the two leave nothing of the record to predict.
+        """
+        train, evaluate = (value / 100 if unit == "%" else _seconds((value, unit), n, rate)
+                           * rate / n for value, unit in (self.train, self.evaluate))
+        if train + evaluate >= 1:
+            raise InputError(f"the split {self} leaves nothing of the record ({n} samples, "
+                             f"{n / rate:.6g} s at {rate:g} Hz) to predict")
+        return train, evaluate
+
+    def __str__(self) -> str:
+        return ",".join(f"{value:g}{unit}" for value, unit in (self.train, self.evaluate))
+
+
+def _length(text: str) -> tuple[float, str] | None:
+    """``(value, unit)`` of a positive length like ``180s``, ``3min`` or ``50%``, else None."""
+    match = re.fullmatch(r"\s*(.+?)\s*(s|min|h|%)\s*", text)
+    try:
+        value = float(match[1]) if match else math.nan
+    except ValueError:
+        value = math.nan
+    return (value, match[2]) if math.isfinite(value) and value > 0 else None
+
+
+def _seconds(length: tuple[float, str], n: int, rate: float) -> float:
+    value, unit = length
+    return value / 100 * n / rate if unit == "%" else value * _SECONDS[unit]

@@ -80,6 +80,28 @@ def to_si_scale(sensor: str, units: str) -> float:
     return scales[units]
 
 
+def sensor_of(units: str) -> str:
+    """The sensor that reads in ``units``: no unit belongs to both.
+
+    Examples
+    --------
+    >>> sensor_of("deg/h"), sensor_of("mg")
+    ('gyro', 'accel')
+
+    Raises
+    ------
+    InputError
+        Unknown units; the message lists the valid ones of each sensor.
+    """
+    for sensor, scales in _SI_SCALES.items():
+        if units in scales:
+            return sensor
+    known = [u for scales in _SI_SCALES.values() for u in scales]
+    raise InputError(f"unknown units {units!r}{did_you_mean(str(units), known)}; valid units: "
+                     + "; ".join(f"{', '.join(scales)} ({sensor})"
+                                 for sensor, scales in _SI_SCALES.items()))
+
+
 def equivalent_position_error(
     mse: float, sensor: str, units: str, horizon_s: float = 3600.0, g: float = PAPER_GRAVITY
 ) -> float:

@@ -1,0 +1,232 @@
+"""Each column's sensor and units: given, told by its units, or read from its name.
+
+A unit belongs to one sensor (:func:`fosmodel.noise.metrics.sensor_of`: deg/s,
+rad/s, deg/h are a gyro's, m/s^2, g, mg an accelerometer's), so units given per
+column (:class:`UnitsSpec`, ``gx=deg/s,ax=g``) say everything; a column without
+them is read from its name (:func:`infer_axis`): ``gx``, ``gyro_x``, ``wx``,
+``angular_velocity.x`` are gyros, ``ax``, ``acc_x``, ``linear_acceleration.x``
+accelerometers, and a suffix ``_dps``, ``_rads``, ``_g``, ``_mg``, ``_mps2``
+gives the units.  :func:`resolve_axes` puts these together, with a sensor or
+units per sensor given for every column.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+from ..core.exceptions import InputError
+from .metrics import sensor_of, to_si_scale
+
+SENSORS = ("gyro", "accel")
+#: Each sensor as the messages name it, and an example of its units.
+_NAMED = {"gyro": "a gyro", "accel": "an accelerometer"}
+_EXAMPLE_UNITS = {"gyro": "deg/s", "accel": "m/s^2"}
+#: Name prefixes before the axis letter (``gx``, ``gyro_x``, ``angular_velocity.x``); the
+#: one-letter ones only right before it.
+_PREFIXES = {
+    "gyro": ("gyroscope", "gyro", "gyr", "angular_velocity", "ang_vel", "omega", "g", "w"),
+    "accel": ("accelerometer", "linear_acceleration", "accel", "acc", "a"),
+}
+#: Units spelled in a name after the sensor and axis (``gx_dps``, ``gyro_rad[0]``, ``ax_g``).
+_UNIT_WORDS = {
+    "gyro": {"dps": "deg/s", "degs": "deg/s", "deg_s": "deg/s", "deg": "deg/s",
+             "rads": "rad/s", "rad_s": "rad/s", "radps": "rad/s", "rps": "rad/s",
+             "rad": "rad/s", "dph": "deg/h", "deg_h": "deg/h"},
+    "accel": {"g": "g", "mg": "mg", "mps2": "m/s^2", "ms2": "m/s^2", "m_s2": "m/s^2",
+              "m_s_2": "m/s^2"},
+}
+
+
+@dataclass(frozen=True)
+class Axis:
+    """A column to analyse: its sensor, its units and where each came from."""
+
+    column: str
+    sensor: str
+    units: str
+    told: str  # "given", "units given", "from the name", "gyro from the name, units given"
+
+    def describe(self) -> str:
+        return f"{self.column}: {self.sensor} in {self.units} ({self.told})"
+
+
+@dataclass(frozen=True)
+class UnitsSpec:
+    """Units given for the columns: per column, and one for every column not named.
+
+    Parameters
+    ----------
+    every : str, optional
+        Units of every column not in ``columns``.
+    columns : mapping of str to str
+        Units by column name.
+
+    Examples
+    --------
+    >>> spec = UnitsSpec.parse("deg/s,ax=g")
+    >>> spec.of("ax"), spec.of("gy")
+    ('g', 'deg/s')
+    """
+
+    every: str | None = None
+    columns: Mapping[str, str] = field(default_factory=dict)
+
+    @classmethod
+    def parse(cls, text: str) -> UnitsSpec:
+        """Read ``UNITS`` (every column), ``COLUMN=UNITS,...`` or both, comma-separated.
+
+        Raises
+        ------
+        InputError
+            Not of that form, a column given twice, or unknown units (the message lists them).
+        """
+        every, columns = None, {}
+        for part in text.split(","):
+            column, sep, units = (s.strip() for s in part.partition("="))
+            if not sep:
+                column, units = "", column
+            if not units or (sep and not column) or (not sep and every is not None):
+                raise InputError(f"expected UNITS or COLUMN=UNITS,... (e.g. deg/s or "
+                                 f"gx=deg/s,ax=g), got {text!r}")
+            if column in columns:
+                raise InputError(f"the units of column {column!r} are given twice in {text!r}")
+            sensor_of(units)  # refuses unknown units, listing the valid ones
+            if sep:
+                columns[column] = units
+            else:
+                every = units
+        return cls(every, columns)
+
+    def of(self, column: str) -> str | None:
+        """The units given for ``column``, or None."""
+        return self.columns.get(column, self.every)
+
+
+def infer_axis(column: str) -> tuple[str | None, str | None]:
+    """The sensor (``"gyro"``/``"accel"``) and units a column's name tells, or None for each.
+
+    Examples
+    --------
+    >>> infer_axis("gx_dps"), infer_axis("acc_y"), infer_axis("temp")
+    (('gyro', 'deg/s'), ('accel', None), (None, None))
+    """
+    name = column.strip().lower()
+    for sensor, prefixes in _PREFIXES.items():
+        for prefix in prefixes:
+            rest = _after_prefix(name, prefix)
+            if rest is not None:
+                return sensor, _units_in(sensor, rest)
+    return None, None
+
+
+def _after_prefix(name: str, prefix: str) -> str | None:
+    """What follows ``prefix`` and the axis in ``name``, or None if ``name`` is not of it.
+
+    A one-letter prefix must be followed by the axis letter (``gx``, not ``gain``); a longer one
+    by a separator or the axis letter (``gyro_x``, ``gyrox``, ``gyro_rad[0]``).
+    """
+    if not name.startswith(prefix):
+        return None
+    rest = name[len(prefix):]
+    axis = re.match(r"[xyz](?![a-z])", rest)
+    if axis:
+        return rest[axis.end():]
+    if len(prefix) > 1 and rest[:1] in ("_", ".", "-", " ", "[", "("):
+        return rest
+    return None
+
+
+def _units_in(sensor: str, rest: str) -> str | None:
+    """Units named in the rest of a column name: its words, joined by underscores."""
+    words = [w for w in re.split(r"[^a-z0-9]+", rest) if w and w not in ("x", "y", "z")
+             and not w.isdigit()]
+    joined = "_".join(words)
+    for spelled, units in _UNIT_WORDS[sensor].items():
+        if joined == spelled or spelled in words:
+            return units
+    return None
+
+
+def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None, *,
+                 given: UnitsSpec | None = None, sensor: str | None = None) -> list[Axis]:
+    """Each column's sensor and units.
+
+    In this order: given with the column as ``name:sensor:units``; the units ``given`` for it
+    (they tell its sensor); else its sensor is ``sensor`` or the one its name tells, and its
+    units those of ``units`` (per sensor) or the ones its name tells.
+
+    Parameters
+    ----------
+    columns : sequence of str
+        Column names, each optionally as ``name:sensor:units``.
+    units : mapping of str to str, optional
+        Units per sensor (``{"gyro": "deg/s"}``), for the columns ``given`` says nothing of.
+    given : UnitsSpec, optional
+        Units per column and for every column.
+    sensor : {"gyro", "accel"}, optional
+        The sensor of every column: a column whose units tell another is refused.
+
+    Raises
+    ------
+    InputError
+        A column whose sensor or units cannot be told (the message says how to give them),
+        units of another sensor than ``sensor``, an unknown sensor or units, a column named
+        twice, or units given for a column that is not among ``columns``.
+    """
+    units, given = dict(units or {}), given or UnitsSpec()
+    if sensor is not None and sensor not in SENSORS:
+        raise InputError(f"unknown sensor {sensor!r}; valid sensors: {', '.join(SENSORS)}")
+    names = [spec.split(":")[0] for spec in columns]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise InputError(f"column {twice[0]!r} is named twice in --columns")
+    if not names:
+        raise InputError("no columns to analyse")
+    stray = [c for c in given.columns if c not in names]
+    if stray:
+        raise InputError(f"units are given for column {stray[0]!r}, which is not among the "
+                         f"columns: {', '.join(names)}")
+    return [_resolve(spec, units, given, sensor) for spec in columns]
+
+
+def _resolve(spec: str, units: Mapping[str, str], given: UnitsSpec,
+             sensor: str | None) -> Axis:
+    column, *inline = spec.split(":")
+    if inline:
+        if len(inline) != 2 or not all(inline):
+            raise InputError(f"expected COLUMN or COLUMN:SENSOR:UNITS (e.g. gx:gyro:deg/s), "
+                             f"got {spec!r}")
+        to_si_scale(inline[0], inline[1])  # refuses unknown sensors and units, listing them
+        return _checked(Axis(column, inline[0], inline[1], "given"), sensor)
+    told = given.of(column)
+    if told is not None:
+        return _checked(Axis(column, sensor_of(told), told, "units given"), sensor)
+    named_sensor, named_units = infer_axis(column)
+    if sensor and named_sensor and named_sensor != sensor:
+        raise InputError(f"column {column!r}: its name tells {_NAMED[named_sensor]}, not "
+                         f"{_NAMED[sensor]}; if it is one, give its units as {column}=UNITS")
+    kind = sensor or named_sensor
+    if kind is None:
+        raise InputError(f"column {column!r}: its name does not tell the sensor; give its "
+                         f"units, which do, as {column}=UNITS (e.g. {column}=deg/s for a gyro, "
+                         f"{column}=m/s^2 for an accelerometer)")
+    if kind in units:
+        to_si_scale(kind, units[kind])
+        how = "given" if sensor else f"{kind} from the name, units given"
+        return Axis(column, kind, units[kind], how)
+    if named_units is None:
+        by = "" if sensor else " by its name"
+        raise InputError(f"column {column!r}: {_NAMED[kind]}{by}, but the name does not tell "
+                         f"its units; give them as {column}=UNITS (e.g. "
+                         f"{column}={_EXAMPLE_UNITS[kind]})")
+    return Axis(column, kind, named_units, "from the name")
+
+
+def _checked(axis: Axis, sensor: str | None) -> Axis:
+    """``axis``, unless its units are of another sensor than ``sensor``."""
+    if sensor is not None and axis.sensor != sensor:
+        raise InputError(f"column {axis.column!r}: {axis.units} is a unit of "
+                         f"{_NAMED[axis.sensor]}, not of {_NAMED[sensor]}")
+    return axis
