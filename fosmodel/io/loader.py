@@ -43,9 +43,9 @@ import lzma
 import os
 import re
 import warnings
-from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import NamedTuple
+from typing import IO, TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -55,6 +55,9 @@ from ..core.validation import did_you_mean
 from .record import Record
 from .sensor_log import SensorLog
 from .topics import FORMATS, TopicError, is_sensor_log, read_topic
+
+if TYPE_CHECKING:
+    from _typeshed import WriteableBuffer
 
 TIME_COLUMNS = ("time", "time_s", "t_s")
 OUTLIER_MODES = ("keep", "clip", "drop")
@@ -68,7 +71,8 @@ _RATE_KEYS = frozenset({"fs", "rate", "samplerate", "samplingrate", "samplefrequ
                         "samplingfrequency", "outputdatarate", "odr"})
 _BURSTY_MIN_SAMPLES = 100
 _SHOWN = 5  # positions listed in a note
-_OPENERS = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
+#: The openers of compressed files (their signatures differ: each is called as open is).
+_OPENERS: dict[str, Callable[..., Any]] = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open}
 _NOT_REAL = {"c": "complex numbers", "M": "dates", "m": "time spans"}  # by numpy dtype kind
 #: Larger values overflow the sums of products the models form (degree 4 and more).
 _MAX_ABS = 1e30
@@ -89,7 +93,7 @@ class _Preamble(NamedTuple):
 
 
 class _Outliers(NamedTuple):
-    index: np.ndarray
+    samples: np.ndarray
     low: float
     high: float
 
@@ -193,7 +197,7 @@ def load_record(
     rate, given_by, metadata = _preamble_rate(preamble, rate, src, notes)
     _apply_scale(data, scale or {}, src, notes)
     _check_magnitude(data, scale or {}, src, first_line)
-    time_name = next((c for c in TIME_COLUMNS if c in data), None)
+    time_name = next((c for c in TIME_COLUMNS if c in data), "")
     time = data.pop(time_name) if time_name else None
     if not data:
         raise InputError(f"{src}: only a time column, no data columns")
@@ -211,7 +215,7 @@ def load_record(
     found = _find_outliers(data)
     record = Record(src, data, float(rate) if rate is not None else None, time, notes,
                     log.metadata if log else metadata,
-                    {name: out.index for name, out in found.items()}, segments, units)
+                    {name: out.samples for name, out in found.items()}, segments, units)
     _handle_outliers(record, found, outliers, first_line)
     return record
 
@@ -252,7 +256,7 @@ def _factor(text: str) -> float | None:
 
 
 def _sensor_log(path: Path, topic: str | None, temperature_topic: str | None) -> SensorLog | None:
-    """The IMU topic of a log (a ROS bag, a PX4 ULog), or None for a table."""
+    """Read the IMU topic of a log (a ROS bag, a PX4 ULog); None for a table."""
     if not is_sensor_log(path):
         asked = next((key for key, value in (("topic", topic),
                                              ("temperature_topic", temperature_topic)) if value),
@@ -279,8 +283,10 @@ def _header(path: Path) -> tuple[list[str], int, _Preamble]:
 
 
 def _check_regular(path: Path) -> None:
-    """Refuse what is not a regular file (a record is read, and re-read, to its end), and an
-    empty one."""
+    """Refuse what is not a regular file, and an empty one.
+
+    A record is read, and re-read, to its end.
+    """
     if not path.exists():
         raise InputError(f"{path}: no such file" + (" (a broken symbolic link)"
                                                     if path.is_symlink() else ""))
@@ -304,7 +310,7 @@ def _kind(path: Path) -> str:
 
 def _kept(names: list[str], columns: Sequence[str] | None, scale: Mapping[str, float],
           src: str) -> list[str] | None:
-    """The columns to read (None: all): those asked for, the time and the scaled ones."""
+    """Return the columns to read (None: all): those asked for, the time and the scaled ones."""
     unknown = [c for c in scale if c not in names]
     if unknown:
         raise InputError(f"{src}: --scale names no column {unknown[0]!r}"
@@ -322,7 +328,7 @@ def _kept(names: list[str], columns: Sequence[str] | None, scale: Mapping[str, f
 
 def _blocks(path: Path, skip: int, names: list[str],
             keep: list[str] | None) -> Iterator[pd.DataFrame]:
-    """The kept columns, ``CHUNK_ROWS`` rows at a time."""
+    """Yield the kept columns, ``CHUNK_ROWS`` rows at a time."""
     kind = _kind(path)
     if kind == "npy":
         return _npy_blocks(_open_npy(path), names, keep)
@@ -360,8 +366,11 @@ def _convert(blocks: Iterator[pd.DataFrame], src: str, first_line: int) -> dict[
 
 def _check_time_block(parts: dict[str, list[np.ndarray]], src: str, first_line: int,
                       offset: int) -> None:
-    """The time column's newest block: it must not go backwards (from the previous block on
-    either), nor stand still over a whole block (no sensor repeats its time that long)."""
+    """Check the time column's newest block.
+
+    It must not go backwards (from the previous block on either), nor stand still over a
+    whole block (no sensor repeats its time that long).
+    """
     name = next((c for c in TIME_COLUMNS if c in parts), None)
     if name is None:
         return
@@ -379,8 +388,10 @@ def _check_time_block(parts: dict[str, list[np.ndarray]], src: str, first_line: 
 
 
 def _memory_budget() -> int:
-    """Bytes the kept columns may take: most of the machine's free memory (``FOSMODEL_MAX_MEMORY``
-    in bytes sets it)."""
+    """Return the bytes the kept columns may take: most of the machine's free memory.
+
+    ``FOSMODEL_MAX_MEMORY`` (in bytes) sets it.
+    """
     if "FOSMODEL_MAX_MEMORY" in os.environ:
         return int(float(os.environ["FOSMODEL_MAX_MEMORY"]))
     try:
@@ -440,7 +451,7 @@ _CSV_OPTIONS = {"sep": ",", "skipinitialspace": True}
 
 
 def _csv_names(path: Path, skip: int) -> list[str]:
-    """The header on line ``skip + 1``, as written (pandas would rename a repeated name)."""
+    """Return the header on line ``skip + 1``, as written (pandas would rename a repeated name)."""
     try:
         names = pd.read_csv(path, header=None, nrows=1, dtype=str, keep_default_na=False,
                             skiprows=skip, **_CSV_OPTIONS).iloc[0].tolist()
@@ -454,7 +465,7 @@ def _csv_names(path: Path, skip: int) -> list[str]:
 
 
 def _csv_blocks(path: Path, skip: int, keep: list[str] | None) -> Iterator[pd.DataFrame]:
-    """The rows under the header, in blocks.
+    """Yield the rows under the header, in blocks.
 
     ``index_col=False``: a first data row longer than the header is an error,
     never a silent shift of the columns onto an index.  Every field is parsed
@@ -480,8 +491,11 @@ def _csv_blocks(path: Path, skip: int, keep: list[str] | None) -> Iterator[pd.Da
 
 @contextlib.contextmanager
 def _source(path: Path):
-    """The file to parse: its path, or for a compressed file a stream that stops (InputError)
-    once it has given more than ``_EXPANSION`` times the file's size (and ``_EXPANSION_FLOOR``)."""
+    """Give the file to parse: its path, or for a compressed file a capped stream.
+
+    The stream stops (InputError) once it has given more than ``_EXPANSION`` times the file's
+    size (and ``_EXPANSION_FLOOR``).
+    """
     opener = _OPENERS.get(path.suffix.lower())
     if opener is None:
         yield path
@@ -494,21 +508,22 @@ def _source(path: Path):
 class _Capped(io.RawIOBase):
     """A binary stream that refuses to give more than ``limit`` bytes."""
 
-    def __init__(self, raw, limit: int, path: Path) -> None:
+    def __init__(self, raw: IO[bytes], limit: int, path: Path) -> None:
         self.raw, self.limit, self.path, self.given = raw, limit, path, 0
 
     def readable(self) -> bool:
         return True
 
-    def readinto(self, buffer) -> int:
-        data = self.raw.read(len(buffer))
+    def readinto(self, buffer: WriteableBuffer) -> int:
+        view = memoryview(buffer).cast("B")
+        data = self.raw.read(len(view))
         self.given += len(data)
         if self.given > self.limit:
             size = self.path.stat().st_size
             raise InputError(f"{self.path}: decompresses to more than {_EXPANSION} times its size "
                              f"({size:,} bytes, so far {self.given:,}); fosmodel stops there (a "
                              "damaged file, or not a record?)")
-        buffer[: len(data)] = data
+        view[: len(data)] = data
         return len(data)
 
 
@@ -524,7 +539,7 @@ def _check_last_field(block: pd.DataFrame, keep: list[str], path: Path, first_li
 
 
 def _csv_error(path: Path, skip: int, exc: Exception) -> Exception:
-    """The InputError for a failed CSV read (other exceptions pass through)."""
+    """Return the InputError for a failed CSV read (other exceptions pass through)."""
     if isinstance(exc, InputError):
         return exc
     if isinstance(exc, pd.errors.EmptyDataError):
@@ -569,7 +584,7 @@ def _non_utf8_line(path: Path) -> str:
 
 
 def _open_npy(path: Path) -> np.ndarray:
-    """The array, memory-mapped: blocks are read from it as they are converted."""
+    """Open the array memory-mapped: blocks are read from it as they are converted."""
     try:
         arr = np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError) as exc:
@@ -637,7 +652,7 @@ def _where(i: int, first_line: int) -> str:
 
 
 def _numeric(col: pd.Series, src: str, name: str, first_line: int, offset: int) -> np.ndarray:
-    """The block's column as float64, or an error naming its first cell that is not a number.
+    """Return the block's column as float64; an error names its first cell that is no number.
 
     ``offset`` is the block's first sample.  Empty cells become NaN (reported by
     :func:`_check_finite` once the whole column is read).
@@ -673,7 +688,7 @@ def _check_finite(arr: np.ndarray, src: str, name: str, first_line: int) -> None
 def _preamble_rate(
     preamble: _Preamble, rate: float | None, src: str, notes: list[str]
 ) -> tuple[float | None, str, dict[str, str]]:
-    """The rate (given, else from the preamble), what gave it, and the other preamble entries."""
+    """Return the rate (given, else from the preamble), what gave it, and the other entries."""
     given_by = f"--rate {rate:g} Hz" if rate is not None else ""
     keys = [re.sub(r"[^a-z]", "", key.lower()).removesuffix("hz") for _, key, _ in
             preamble.entries]
@@ -738,7 +753,7 @@ def _note_integer_columns(data: dict[str, np.ndarray], known: Collection[str],
 def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool, src: str,
                name: str, first_line: int, notes: list[str],
                gaps: str = "refuse") -> tuple[float, np.ndarray]:
-    """The rate and time of a record with a time column, after checking the column.
+    """Return the rate and time of a record with a time column, after checking the column.
 
     With ``gaps`` other than "refuse" the gap check is left to :func:`_handle_gaps`
     and the rate is the median interval's.
@@ -785,7 +800,8 @@ def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: boo
     return rate, time
 
 
-def _handle_gaps(data, time, gaps, src, name, first_line, notes):
+def _handle_gaps(data: dict[str, np.ndarray], time: np.ndarray, gaps: str, src: str, name: str,
+                 first_line: int, notes: list[str]):
     """Fill the gaps of a regular time column, or list its contiguous segments."""
     dt = np.diff(time)
     step = float(np.median(dt))
@@ -809,7 +825,7 @@ def _handle_gaps(data, time, gaps, src, name, first_line, notes):
 
 
 def _is_bursty(time: np.ndarray, dt: np.ndarray) -> bool:
-    """A host's receive time: most intervals far below the mean one, yet a steady overall rate.
+    """Whether time is a host's receive time: most intervals far below the mean, a steady rate.
 
     Bursty when the record has at least ``_BURSTY_MIN_SAMPLES`` samples, the
     median interval is under half the mean interval (samples arrive in bursts
@@ -824,10 +840,12 @@ def _is_bursty(time: np.ndarray, dt: np.ndarray) -> bool:
     return bool(np.all(np.abs(counts - len(time) / 10) <= 0.25 * len(time) / 10))
 
 
-def _check_order(time, dt, src, name, first_line, *, repeats_allowed: bool,
-                 offset: int = 0) -> None:
-    """Time that goes backwards (or repeats, unless allowed); ``offset`` is the sample
-    number of ``time[0]`` in the record."""
+def _check_order(time: np.ndarray, dt: np.ndarray, src: str, name: str, first_line: int, *,
+                 repeats_allowed: bool, offset: int = 0) -> None:
+    """Refuse time that goes backwards (or repeats, unless allowed).
+
+    ``offset`` is the sample number of ``time[0]`` in the record.
+    """
     bad = np.flatnonzero(dt < 0 if repeats_allowed else dt <= 0)
     if bad.size:
         i = int(bad[0]) + 1
@@ -836,7 +854,7 @@ def _check_order(time, dt, src, name, first_line, *, repeats_allowed: bool,
                          f"({float(time[i - 1])!r} then {float(time[i])!r})")
 
 
-def _check_gaps(dt, src, name, first_line) -> None:
+def _check_gaps(dt: np.ndarray, src: str, name: str, first_line: int) -> None:
     step = float(np.median(dt))
     gaps = np.flatnonzero(dt > 1.5 * step)
     if gaps.size:
@@ -849,7 +867,7 @@ def _check_gaps(dt, src, name, first_line) -> None:
 
 
 def _find_outliers(data: dict[str, np.ndarray]) -> dict[str, _Outliers]:
-    """Samples farther than ``OUTLIER_K`` robust standard deviations from their column's median.
+    """Find samples farther than ``OUTLIER_K`` robust standard deviations from the median.
 
     The robust standard deviation is 1.4826 times the median absolute
     deviation; when more than half the column sits on its median (MAD = 0, as
@@ -890,12 +908,13 @@ def _handle_outliers(record: Record, found: dict[str, _Outliers], mode: str,
     for name, out in found.items():
         bounds = f"[{out.low:.6g}, {out.high:.6g}]"
         record.notes.append(
-            f"column {name!r}: {out.index.size} outlier(s) ({rule}, outside {bounds}) at "
-            f"{_positions(out.index, first_line)}; {done}{' ' + bounds if mode == 'clip' else ''}")
+            f"column {name!r}: {out.samples.size} outlier(s) ({rule}, outside {bounds}) at "
+            f"{_positions(out.samples, first_line)}; "
+            f"{done}{' ' + bounds if mode == 'clip' else ''}")
         if mode == "clip":
             record.data[name] = np.clip(record.data[name], out.low, out.high)
     if mode == "drop":
-        _drop_rows(record, np.unique(np.concatenate([o.index for o in found.values()])))
+        _drop_rows(record, np.unique(np.concatenate([o.samples for o in found.values()])))
 
 
 def _drop_rows(record: Record, rows: np.ndarray) -> None:
