@@ -25,7 +25,7 @@ from .io.samples import load_mpu6050_static
 from .loop.closeloop import LoopConfig, close_loop
 from .loop.loop_report import write_loop_report
 from .study.harness import StudyConfig, StudyResult
-from .study.report import paper_table, write_study
+from .study.report import paper_table, table_orders, write_study
 from .study.runner import run_study
 
 SEED = 2013
@@ -39,7 +39,7 @@ MPU_STUDY = ("gx", "ay")
 
 
 def _print_table(title: str, result: StudyResult) -> None:
-    print(f"\n{title}, orders 1 and 10")
+    print(f"\n{title}, orders {' and '.join(map(str, table_orders(result)))}")
     print(paper_table(result).to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     for note in result.warnings:
         print(f"warning: {note}")
@@ -57,9 +57,9 @@ def run_paper_records(out_dir: Path) -> dict[str, StudyResult]:
               f"{config.units}; {len(config.configurations())} configurations x "
               f"{len(config.protocols)} protocols", flush=True)
         result = run_study(rec.columns[rec.target], config, progress=sys.stderr.isatty())
-        title = f"Table {number}: {name} ({scenario}, seed {SEED})"
+        title = f"{name} ({scenario}, seed {SEED})"
         write_study(result, out_dir / name, title)
-        _print_table(title, result)
+        _print_table(f"Table {number}: {title}", result)
         results[name] = result
     return results
 

@@ -321,7 +321,7 @@ def test_summary_figure_and_json():
     labels = fig.axes[0].get_legend_handles_labels()[1]
     arw = fit.navigation("N")[0]
     assert abs(arw - 4.08) < 3 * fit.stderr["N"] * 60  # 0.068 deg/sqrt(s) is 4.08 deg/sqrt(h)
-    assert f"N angle random walk = {arw:.3g} deg/sqrt(h)" in labels
+    assert f"N angle random walk = {arw:.3g} deg/$\\sqrt{{\\mathrm{{h}}}}$" in labels
     assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == "fit / data"
     assert "fitted sum" in labels
     frame = result.to_frame()

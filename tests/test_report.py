@@ -60,3 +60,20 @@ def test_write_study_writes_tables_figures_and_report(result, tmp_path):
     assert "# Test study" in report and "![fair protocol](order_fair.png)" in report
     assert "## About the local level (fair protocol)" in report
     assert not [p for p in (tmp_path / "out").iterdir() if p.name.endswith(".tmp")]
+
+
+def test_the_comparison_table_takes_the_lowest_and_the_highest_order(tmp_path):
+    e = np.random.default_rng(1).standard_normal(7000)
+    y = lfilter([1.0], [1.0, -0.8, 0.3], e)[1000:] * 0.01
+    config = StudyConfig(rate=10.0, sensor="gyro", units="deg/s", orders=(1, 2, 3, 4),
+                         degrees=(1,), train_s=200.0, evaluate_s=200.0, n_starts=3, levels=False)
+    result = run_study(y, config)
+    table = paper_table(result)
+    assert list(table["Order L"].unique()) == [1, 4]
+    assert set(table[table["Order L"] == 4]["Method"]) == {
+        "Yule-Walker", "Covariance", "Burg", "FOS CP=1"}
+    assert "Gauss-Markov" in set(table[table["Order L"] == 1]["Method"])
+    assert list(paper_table(result, orders=(2, 3))["Order L"].unique()) == [2, 3]
+    write_study(result, tmp_path, "orders 1-4")
+    assert "## Comparison at orders 1 and 4 (FOS paper" in (tmp_path / "report.md").read_text()
+    assert "at model orders 1 and 4" in (tmp_path / "comparison.tex").read_text()

@@ -12,6 +12,7 @@ import argparse
 import importlib
 import json
 import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -180,7 +181,7 @@ def study(args: argparse.Namespace) -> int:
 def close_loop(args: argparse.Namespace) -> int:
     from ..loop.closeloop import LoopConfig
     from ..loop.closeloop import close_loop as run_loop
-    from ..loop.loop_report import effects_table, write_loop_report
+    from ..loop.loop_report import CONSOLE_WIDTH, console_summary, write_loop_report
 
     json_path = _out_path(args.json) if args.json else None
     model_path = _out_path(args.model) if args.model else None
@@ -196,9 +197,9 @@ def close_loop(args: argparse.Namespace) -> int:
     channels = {name: rec.column(name) for name in aux}
     config = LoopConfig(rate=rec.require_rate(), sensor=args.sensor, units=args.units,
                         max_lag=args.max_lag, train=args.split[0], evaluate=args.split[1])
-    result = run_loop(y, channels, config,
-                      progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,
-                                                  flush=True))
+    result = run_loop(y, channels, config, progress=lambda line: print(
+        textwrap.fill(f"fosmodel: {line}", CONSOLE_WIDTH, subsequent_indent="fosmodel:     "),
+        file=sys.stderr, flush=True))
     with report_directory(out, [args.file]) as tmp:
         write_loop_report(result, tmp, args.title or f"{args.column} of {Path(args.file).name}")
     if model_path:
@@ -206,10 +207,7 @@ def close_loop(args: argparse.Namespace) -> int:
                 "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment",
                 "effects": [step.effect.describe() for step in result.steps]}
         write_model(model_path, result.final_model.model, meta)
-    print(effects_table(result).drop(columns=["Evidence"]).to_string(
-        index=False, float_format=lambda v: f"{v:.4g}"))
-    if result.unexplained:
-        print(f"still firing, with no effect that survives: {', '.join(result.unexplained)}")
+    print(console_summary(result))
     if json_path:
         write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
     print(f"residual loop report written to {out.resolve()}/"

@@ -9,12 +9,14 @@ directory is written beside its destination and moved into place in one step
 (:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
 that no output names a file the command reads, however the two are spelt.
 :func:`write_tables` and :func:`save_figure` write a table (Markdown, CSV,
-LaTeX) and a figure (PNG, SVG) that way.
+LaTeX with booktabs rules, a caption and a label) and a figure (a 300 dpi PNG and an SVG, plain
+tick labels on a log axis of less than two decades) that way.
 """
 
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import re
 import shutil
@@ -23,7 +25,10 @@ from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import IO, TYPE_CHECKING
 
+import numpy as np
+
 from ..core.exceptions import InputError
+from ..models.latex import latex_table, table_label
 from ..models.summary import markdown_table
 
 if TYPE_CHECKING:
@@ -208,21 +213,79 @@ def _move(tmp: Path, out: Path) -> None:
         os.replace(tmp, out)
 
 
-def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str) -> list[Path]:
-    """``stem.md``, ``stem.csv`` and ``stem.tex`` in ``out_dir``, each written atomically."""
+def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str, caption: str | None = None,
+                 report: str = "") -> list[Path]:
+    """``stem.md``, ``stem.csv`` and ``stem.tex`` in ``out_dir``, each written atomically.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The table.
+    out_dir : Path
+        An existing directory.
+    stem : str
+        The files' name without the extension.
+    caption : str, optional
+        The LaTeX table's caption (default: the stem in words).
+    report : str, optional
+        The report's name or title: the LaTeX label is ``tab:fosmodel-<report>-<stem>``
+        (:func:`fosmodel.models.latex.table_label`), the same on every run.
+
+    Returns
+    -------
+    list of Path
+        The three files.
+    """
     paths = [out_dir / f"{stem}.{ext}" for ext in ("md", "csv", "tex")]
     write_text(paths[0], markdown_table(frame, digits=4) + "\n")
     write_text(paths[1], frame.to_csv(index=False))
-    write_text(paths[2], frame.to_latex(index=False, float_format="%.4g", na_rep="--"))
+    write_text(paths[2], latex_table(frame, caption or stem.replace("_", " ").capitalize(),
+                                     table_label(report, stem)))
     return paths
 
 
+#: Resolution of the PNG figures: print quality.
+FIGURE_DPI = 300
+
+
 def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
-    """``stem.png`` and ``stem.svg`` in ``out_dir``, each written atomically."""
+    """``stem.png`` (at :data:`FIGURE_DPI`) and ``stem.svg`` in ``out_dir``, each written
+    atomically, after :func:`plain_log_ticks`."""
+    plain_log_ticks(fig)
     paths = []
     for ext in ("png", "svg"):
         path = out_dir / f"{stem}.{ext}"
         with atomic_write(path, "wb") as fh:
-            fig.savefig(fh, format=ext, dpi=120)
+            fig.savefig(fh, format=ext, dpi=FIGURE_DPI)
         paths.append(path)
     return paths
+
+
+def plain_log_ticks(fig: Figure) -> None:
+    """Plain tick labels (``0.02``, ``0.05``, ``0.1``) on every log axis of ``fig`` that spans
+    less than two decades.
+
+    Left to itself matplotlib labels such an axis with powers of ten at the minor ticks, or,
+    when no minor tick falls in view, with linear ticks such as ``1.22x10^1``.  Here the major
+    ticks go to 1, 2 and 5 times the powers of ten (and 3 within one decade; the locator falls
+    back to linear ticks inside a narrower view by itself) and every label is the number in
+    positional notation (``0.00002``, never ``2e-05``); an axis spanning more keeps its labels
+    at the powers of ten.
+    """
+    from matplotlib import ticker  # here: writing tables or text needs no matplotlib
+
+    for ax in fig.axes:
+        for axis, limits in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+            low, high = sorted(limits)
+            if axis.get_scale() != "log" or low <= 0 or math.log10(high / low) >= 2:
+                continue
+            subs = (1.0, 2.0, 5.0) if high / low >= 10 else (1.0, 2.0, 3.0, 5.0)
+            axis.set_major_locator(ticker.LogLocator(base=10, subs=subs))
+            axis.set_major_formatter(ticker.FuncFormatter(_plain_number))
+            axis.set_minor_formatter(ticker.NullFormatter())
+
+
+def _plain_number(value: float, _position: int | None = None) -> str:
+    """A tick value to three significant digits, without an exponent."""
+    return np.format_float_positional(value, precision=3, unique=True, fractional=False,
+                                      trim="-")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +10,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from ..io.output import save_figure, write_tables, write_text
+from ..models.latex import mathtext_units
 from ..models.summary import markdown_table
 from .closeloop import LoopResult, worse_metrics
 from .diagnose import Finding
@@ -56,51 +58,75 @@ def findings_table(before: list[Finding], after: list[Finding]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+#: How the first (before) and the final (after) model are drawn: the first wide and grey, the
+#: final thin, blue and dashed over it, so both show where they coincide.
+_STYLES = {"before": {"color": "0.6", "lw": 2.6, "ls": "-"},
+           "after": {"color": "C0", "lw": 1.1, "ls": "--"}}
+
+
 def residual_figure(result: LoopResult, title: str) -> Figure:
-    """Residual diagnostics of the first (grey) and the final (colour) model."""
+    """Residual diagnostics of the first (wide, grey) and the final (thin, blue) model, every
+    panel with its axes' labels."""
     fig = Figure(figsize=(16, 7.5), layout="constrained")
     axes = fig.subplots(2, 4).ravel()
     rate = result.config.rate
-    for findings, color, label in ((result.findings_before, "0.6", "before"),
-                                   (result.findings_after, "C0", "after")):
+    for findings, label in ((result.findings_before, "before"),
+                            (result.findings_after, "after")):
+        style = _STYLES[label]
         by = {f.test: f for f in findings}
         acf = by["whiteness"].plot["acf"]
-        axes[0].plot(np.arange(len(acf)) / rate, acf, color=color, label=label)
+        axes[0].plot(np.arange(len(acf)) / rate, acf, label=label, **style)
         spec = by["periodic"].plot
-        axes[1].semilogy(spec["freqs"], _smooth(spec["spectrum"]), color=color, label=label)
+        axes[1].semilogy(spec["freqs"], _smooth(spec["spectrum"]), label=label, **style)
         al = by["allan"].plot
-        axes[2].loglog(al["taus"], al["adev"], "o-", color=color, ms=3, label=label)
+        axes[2].loglog(al["taus"], al["adev"], marker="o" if label == "before" else "s",
+                       ms=5 if label == "before" else 3, label=label, **style)
         aux = [f for f in findings if f.test == "aux"]
         for k, f in enumerate(aux):
-            axes[3].plot(f.plot["lags"], f.plot["rho"], color=color,
-                         ls=["-", "--", ":", "-."][k % 4], label=f"{label} {f.evidence['channel']}")
+            axes[3].plot(f.plot["lags"], f.plot["rho"], label=f"{label} {f.evidence['channel']}",
+                         **{**style, "ls": ["-", "--", ":", "-."][k % 4]})
         tr = by["trend"].plot
-        axes[4].plot(*_block_means(tr["time"], result_residual(result, label)), color=color,
-                     label=label)
-        axes[4].plot(tr["time"], tr["fit"], color=color, lw=2)
+        axes[4].plot(*_block_means(tr["time"], result_residual(result, label)), label=label,
+                     **style)
+        axes[4].plot(tr["time"], tr["fit"], **{**style, "lw": 2 * style["lw"]})
         cp = by["step"].plot
-        axes[5].plot(cp["time"], cp["cusum"], color=color, label=label)
+        axes[5].plot(cp["time"], cp["cusum"], label=label, **style)
         if "nonlinear" in by:
             nl = by["nonlinear"].plot
-            axes[6].plot(*_binned(nl["product"], nl["residual"]), "o-", color=color, label=label)
+            axes[6].plot(*_binned(nl["product"], nl["residual"]), marker="o", label=label,
+                         **style)
     white = result.findings_before[-1].plot
     axes[2].loglog(white["taus"], white["white"], "k:", label="white noise")
     band = result.findings_before[0].plot["band"]
     for ax in (axes[0], axes[3]):
         ax.axhspan(-band, band, color="0.9", zorder=0)
-    titles = ["residual autocorrelation (lag, s)", "least-squares spectrum (Hz)",
-              "Allan deviation (tau, s)", "cross-correlation with channels (lag, samples)",
-              "slow part: 1 s means and trend fit (s)", "CUSUM (s)",
-              "residual against strongest product (binned)"]
-    for ax, text in zip(axes, titles):
+    for ax, (text, xlabel, ylabel) in zip(axes, _panels(result.config.units or "units")):
         ax.set_title(text, fontsize="medium")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
         if ax.lines:
             ax.legend(fontsize="x-small", loc="upper right")  # "best" is slow on long records
     axes[7].axis("off")
     axes[7].text(0, 1, _fired_text(result), va="top", family="monospace", fontsize="small")
-    fig.suptitle(title)
+    fig.suptitle(mathtext_units("Residual diagnostics of the first (wide, grey) and the final "
+                                f"(thin, blue) model: {title}"))
     return fig
+
+
+def _panels(units: str) -> list[tuple[str, str, str]]:
+    """Each panel's title, x label and y label, the units typeset for matplotlib."""
+    u = mathtext_units(units)
+    return [("residual autocorrelation", "lag (s)", "autocorrelation"),
+            ("least-squares spectrum (smoothed)", "frequency (Hz)", "fraction of the variance"),
+            ("Allan deviation of the residual", r"averaging time $\tau$ (s)",
+             f"Allan deviation ({u})"),
+            ("cross-correlation with the channels", "lag (samples)", "correlation"),
+            ("slow part: 1 s means and trend fit", "time (s)", f"residual ({u})"),
+            ("CUSUM of the residual (step test)", "time (s)", f"cumulative sum ({u})"),
+            ("residual against the strongest product",
+             f"binned product of two lags, {mathtext_units(f'({units})^2')}",
+             f"mean residual ({u})")]
 
 
 def result_residual(result: LoopResult, label: str) -> np.ndarray:
@@ -143,8 +169,12 @@ def write_loop_report(result: LoopResult, out_dir: Path, title: str) -> list[Pat
     out_dir.mkdir(parents=True, exist_ok=True)
     effects = effects_table(result)
     diagnostics = findings_table(result.findings_before, result.findings_after)
-    paths = write_tables(effects, out_dir, "effects")
-    paths += write_tables(diagnostics, out_dir, "diagnostics")
+    paths = write_tables(effects, out_dir, "effects",
+                         f"Residual loop, {title}: prediction-segment errors before and after "
+                         "each effect kept", report=title)
+    paths += write_tables(diagnostics, out_dir, "diagnostics",
+                          f"Residual loop, {title}: diagnostics of the first and the final "
+                          "model", report=title)
     paths += save_figure(residual_figure(result, title), out_dir, "residual")
     paths.append(out_dir / "report.md")
     write_text(paths[-1], report_markdown(result, title, effects, diagnostics))
@@ -184,7 +214,7 @@ def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
         lines.append("")
     if result.unexplained:
         lines += [f"Still firing at the end, with no effect that survives: "
-                  f"{', '.join(result.unexplained)}.", ""]
+                  f"{', '.join(still_firing(result))}.", ""]
     lines += ["![residual diagnostics before and after](residual.png)", ""]
     return "\n".join(lines)
 
@@ -230,3 +260,76 @@ def _verdict_line(result: LoopResult) -> str:
             "starting one: " + ", ".join(change) + ". "
             + (f"It is WORSE there in: {'; '.join(worse)}." if worse
                else "Nothing there got worse by more than 2 %."))
+
+
+def still_firing(result: LoopResult) -> list[str]:
+    """The tests that still fire on the final model, each with where it fires: an auxiliary
+    channel with its lag, a periodic test with its frequency, the nonlinear test with its
+    strongest product, ..."""
+    return [describe_finding(f) for f in result.findings_after if f.fired]
+
+
+def describe_finding(finding: Finding) -> str:
+    """``aux temp_c (lag 3)``, ``periodic 7.314 Hz``, ``nonlinear (y[n-1]*y[n-2])``, ..."""
+    e = finding.evidence
+    where = {"aux": lambda: f" {e['channel']} (lag {e['lag']})",
+             "periodic": lambda: f" {e['freq_hz']:.4g} Hz",
+             "nonlinear": lambda: f" ({e['strongest']})",
+             "trend": lambda: f" ({e['form']})",
+             "step": lambda: f" at {e['time_s']:.4g} s",
+             "allan": lambda: f" (tau {e['tau_max_s']:.3g} s)",
+             "whiteness": lambda: f" (lags 1-{e['lags']})"}
+    return finding.test + where.get(finding.test, str)()
+
+
+#: The width of the console summary of the loop.
+CONSOLE_WIDTH = 100
+_MODEL_WIDTH = 38
+
+
+def console_summary(result: LoopResult, width: int = CONSOLE_WIDTH) -> str:
+    """The loop's outcome for a terminal, every line at most ``width`` characters.
+
+    A row per model (the starting one, then after each effect kept) with the number of terms
+    the effect added (the report lists them) and the main prediction-segment numbers, an
+    effect's name cut with ``...`` beyond 38 characters; then, wrapped, the names that were
+    cut, what each effect made worse and the tests still firing with their channels, lags
+    and frequencies.
+    """
+    cfg = result.config
+    last = list(result.before["bias_rms"])[-1]
+    u = cfg.units or "units"
+    metrics = [result.before] + [step.predict for step in result.steps]
+    full = ["before (starting model)"] + [s.effect.describe() for s in result.steps]
+    names = [_clip(name, _MODEL_WIDTH) for name in full]
+    terms = ["-"] + [str(len(s.terms_added)) for s in result.steps]
+    w = max(len(name) for name in names)
+    columns = ("MSE", "Outage pos. err.", f"Bias RMS {last} s")
+    table = [f"row  {'Model':<{w}}  Terms" + "".join(f"  {c:>10}" for c in columns)]
+    for row, (name, count, m) in enumerate(zip(names, terms, metrics)):
+        values = (m["mse"], m["outage_position_error_m"], m["bias_rms"][last])
+        table.append(f"{row:>3}  {name:<{w}}  {count:>5}" + "".join(
+            f"  {_number(v):>{max(10, len(c))}}" for v, c in zip(values, columns)))
+    notes = [f"row {row}: {name}" for row, name in enumerate(full) if name != names[row]]
+    notes += [f"row {row} made worse: " + "; ".join(worse_metrics(previous, m))
+             for row, (previous, m) in enumerate(zip(metrics, metrics[1:]), start=1)
+             if worse_metrics(previous, m)]
+    if result.unexplained:
+        notes.append("still firing, with no effect that survives: "
+                     + ", ".join(still_firing(result)))
+    head = (f"prediction segment: MSE ({u})^2, outage position error (m, {cfg.horizon_s:g} s), "
+            f"bias RMS ({u})")
+    return "\n".join([*textwrap.wrap(head, width), *(_clip(line, width) for line in table),
+                      *(line for note in notes
+                        for line in textwrap.wrap(note, width, subsequent_indent="    "))])
+
+
+def _number(value: float | None) -> str:
+    return "-" if value is None else f"{value:.4g}"
+
+
+def _clip(text: str, width: int, mark: str = "...") -> str:
+    """``text`` cut to ``width`` characters, ending in ``mark`` when cut."""
+    if len(text) <= width:
+        return text
+    return text[:width - len(mark)].rstrip() + mark

@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from .latex import latex_table, latex_text, table_label
+
 _WIDTH = 78
 
 
@@ -65,24 +67,16 @@ class Summary:
         return self.as_html()
 
     def as_latex(self) -> str:
-        """The facts and the table as two LaTeX ``tabular`` environments, the notes as an
-        ``enumerate``; every special character escaped."""
-        facts = "\n".join(f"{latex_escape(k)} & {latex_escape(v)} \\\\" for k, v in self.info)
-        notes = "\n".join(f"\\item {latex_escape(n)}" for n in self.notes)
+        """The facts and the table as two LaTeX tables by
+        :func:`~fosmodel.models.latex.latex_table` (booktabs rules, a caption, the labels
+        ``tab:fosmodel-<title>-facts`` and ``tab:fosmodel-<title>``), the notes as an
+        ``enumerate``; every special character escaped, units typeset."""
+        facts = pd.DataFrame(self.info, columns=["Fact", "Value"])
+        notes = "\n".join(f"\\item {latex_text(n)}" for n in self.notes)
         return "\n".join([
-            f"% {latex_escape(self.title)}", "\\begin{tabular}{ll}", facts, "\\end{tabular}", "",
-            self.table.to_latex(index=False, na_rep="", float_format=_fmt, escape=True),
-            *(["\\begin{enumerate}", notes, "\\end{enumerate}"] if notes else [])])
-
-
-_LATEX_SPECIAL = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#",
-                  "_": r"\_", "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}",
-                  "^": r"\textasciicircum{}"}
-
-
-def latex_escape(text: str) -> str:
-    """``text`` with LaTeX's special characters escaped."""
-    return "".join(_LATEX_SPECIAL.get(c, c) for c in text)
+            latex_table(facts, f"{self.title}: the fit", table_label(self.title, "facts")),
+            latex_table(self.table, self.title, table_label(self.title), digits=6),
+            *(["\\begin{enumerate}", notes, "\\end{enumerate}", ""] if notes else [])])
 
 
 def markdown_table(frame: pd.DataFrame, digits: int = 6) -> str:

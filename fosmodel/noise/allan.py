@@ -51,6 +51,7 @@ from scipy.special import digamma
 from ..core.exceptions import InputError
 from ..core.validation import as_signal, check_positive, did_you_mean
 from ..io.output import save_figure, write_tables
+from ..models.latex import mathtext_units
 from ..models.summary import Summary
 from .metrics import STANDARD_GRAVITY, to_si_scale
 
@@ -946,10 +947,10 @@ def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
     ax.loglog(grid, fit.model_adev(grid), "-", color="k", lw=1.2, label="fitted sum")
     _readoff_marks(ax, fit)
     ax.set_ylim(result.lower.min() / 3.0, result.upper.max() * 3.0)
-    ax.set_ylabel(f"Allan deviation ({result.units or 'units'})")
+    ax.set_ylabel(f"Allan deviation ({mathtext_units(result.units or 'units')})")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize="x-small")
-    ax.set_title(title)
+    ax.set_title(mathtext_units(f"Allan deviation and the fitted noise terms: {title}"))
     model = fit.model_adev(result.taus)
     low.fill_between(result.taus, model / result.upper, model / result.lower, color="C0",
                      alpha=0.25, label="data's 68 % interval")
@@ -979,7 +980,7 @@ def _readoff_marks(ax, fit: NoiseFit) -> None:
 def _legend(fit: NoiseFit, term: str) -> str:
     nav = fit.navigation(term)
     value, units = nav if nav is not None else (fit.coefficients[term], fit.units(term))
-    text = f"{term} {fit.name(term)} = {value:.3g} {units}"
+    text = f"{term} {fit.name(term)} = {value:.3g} {mathtext_units(units)}"
     return text if fit.resolved[term] else f"{text} (not resolved)"
 
 
@@ -987,5 +988,8 @@ def write_allan(result: AllanResult, fit: NoiseFit, out_dir: Path, title: str) -
     """``allan.png/svg``, ``allan.md/csv/tex`` (the deviation) and ``noise.md/csv/tex``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = save_figure(allan_figure(result, fit, title), out_dir, "allan")
-    paths += write_tables(result.to_frame(), out_dir, "allan")
-    return paths + write_tables(fit.summary().to_frame(), out_dir, "noise")
+    paths += write_tables(result.to_frame(), out_dir, "allan",
+                          f"{title}: overlapping Allan deviation", report=title)
+    return paths + write_tables(fit.summary().to_frame(), out_dir, "noise",
+                                f"{title}: IEEE Std 952 noise terms fitted to the Allan "
+                                "deviation", report=title)

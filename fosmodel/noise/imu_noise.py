@@ -61,6 +61,7 @@ from matplotlib.figure import Figure
 from .._version import __version__
 from ..core.exceptions import InputError
 from ..io.output import save_figure, write_tables, write_text
+from ..models.latex import mathtext_units
 from ..models.summary import Summary
 from .allan import AllanResult, NoiseFit, allan_deviation, fit_noise, write_allan
 from .metrics import to_si_scale
@@ -398,7 +399,7 @@ def _sensor_figure(axes: Sequence[AxisNoise], sensor: str) -> Figure:
         top.loglog(grid, scale * fit.model_adev(grid), "-", color=color, lw=1.0)
         model = fit.model_adev(res.taus)
         low.semilogx(res.taus, model / res.adev, "o-", color=color, ms=2.5, lw=0.7)
-    top.set_ylabel(f"Allan deviation ({units})")
+    top.set_ylabel(f"Allan deviation ({mathtext_units(units)})")
     top.set_title(f"{sensor}: overlapping Allan deviation (dots, 68 % bands) and the fitted "
                   "IEEE Std 952 sums (lines)", fontsize="medium")
     top.grid(True, which="both", alpha=0.3)
@@ -448,8 +449,10 @@ def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str) -> list[Path]:
     axes) and each axis's own report in ``axes/<column>/``.
     """
     out_dir.mkdir(parents=True, exist_ok=True)
-    paths = write_tables(noise.table(), out_dir, "noise")
-    paths += write_tables(noise.si_table(), out_dir, "noise_si")
+    paths = write_tables(noise.table(), out_dir, "noise",
+                         f"{title}: IEEE Std 952 noise terms of every axis", report=title)
+    paths += write_tables(noise.si_table(), out_dir, "noise_si",
+                          f"{title}: the noise terms in SI units, as exported", report=title)
     for sensor, fig in noise.figures().items():
         fig.suptitle(title)
         paths += save_figure(fig, out_dir, f"allan_{sensor}")

@@ -108,7 +108,9 @@ def write_reports(studies: Sequence[ColumnStudy], results: Sequence[StudyResult]
             write_study(result, tmp if single else tmp / study.name,
                         _title(study, title, single))
         if not single:
-            write_tables(combined_best(studies, results), tmp, "best")
+            write_tables(combined_best(studies, results), tmp, "best",
+                         f"{title or 'Studies'}: the best configuration of each method on every "
+                         "record", report=title or "studies")
 
 
 def combined_best(studies: Sequence[ColumnStudy],

@@ -15,6 +15,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from ..io.output import save_figure, write_tables, write_text
+from ..models.latex import mathtext_units
 from ..models.summary import markdown_table
 from .harness import LEVEL, StudyResult, method_label
 
@@ -41,13 +42,15 @@ def study_table(result: StudyResult, frame: pd.DataFrame | None = None) -> pd.Da
     return frame[list(cols)].rename(columns=cols)
 
 
-def paper_table(result: StudyResult, orders: tuple[int, ...] = (1, 10)) -> pd.DataFrame:
+def paper_table(result: StudyResult, orders: tuple[int, ...] | None = None) -> pd.DataFrame:
     """The paper's Table 1/2 layout: per model order, every method and the data it was fit on.
 
+    The orders default to the lowest and the highest the study fitted (:func:`table_orders`).
     FOS is fit on the raw data under both protocols, so it appears once; the
     baselines appear on denoised data (paper protocol) and on raw data (fair).
-    Gauss-Markov is a first-order model and appears in the order-1 block.
+    Gauss-Markov is a first-order model and appears in the block of the lowest order.
     """
+    orders = table_orders(result) if orders is None else orders
     rows = result.rows[~result.rows["method"].str.endswith(LEVEL)]
     rows = rows[rows["order"].isin(orders) | (rows["method"] == "gm")]
     rows = rows.drop_duplicates(subset=["method", "order", "degree", "data"])
@@ -62,6 +65,11 @@ def paper_table(result: StudyResult, orders: tuple[int, ...] = (1, 10)) -> pd.Da
     keep = ["order", "label", "data", "mse", "position_error_m", "outage_position_error_m",
             f"bias_rms_{max(result.config.taus):g}s", "runtime_s", "n_terms"]
     return frame[keep].rename(columns=cols).reset_index(drop=True)
+
+
+def table_orders(result: StudyResult) -> tuple[int, ...]:
+    """The orders of the comparison table: the lowest and the highest of the study."""
+    return tuple(sorted({min(result.config.orders), max(result.config.orders)}))
 
 
 def level_table(result: StudyResult) -> pd.DataFrame:
@@ -92,7 +100,7 @@ def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
     fig = Figure(figsize=(10, 4.2), layout="constrained")
     axes = fig.subplots(1, 2)
     for ax, col, ylabel in (
-        (axes[0], "mse", f"one-step prediction MSE ({cfg.units})$^2$"),
+        (axes[0], "mse", mathtext_units(f"one-step prediction MSE ({cfg.units})^2")),
         (axes[1], "outage_position_error_m",
          f"position error after a {cfg.horizon_s:g} s outage (m)"),
     ):
@@ -110,18 +118,29 @@ def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
         ax.set_xticks(sorted(rows["order"].unique()))
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize="small")
-    fig.suptitle(f"{title}: {protocol} protocol")
+    fig.suptitle(mathtext_units(f"Prediction error against model order, {protocol} protocol: "
+                                f"{title}"))
     return fig
 
 
 def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
     """Every table and figure of a study, plus ``report.md`` that shows them."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    paths = write_tables(paper_table(result), out_dir, "comparison")
-    paths += write_tables(study_table(result), out_dir, "study")
-    paths += write_tables(study_table(result, result.best()), out_dir, "best")
+    orders = " and ".join(map(str, table_orders(result)))
+    tables = {
+        "comparison": (paper_table(result), f"{title}: prediction and outage errors of every "
+                       f"method at model orders {orders} (the FOS paper's Tables 1-2 layout)"),
+        "study": (study_table(result), f"{title}: every configuration scored"),
+        "best": (study_table(result, result.best()),
+                 f"{title}: the best configuration of each method, chosen on the evaluation "
+                 "segment"),
+    }
     if result.config.levels and "fair" in result.config.protocols:
-        paths += write_tables(level_table(result), out_dir, "level")
+        tables["level"] = (level_table(result), f"{title}: each method about the local level "
+                           "(fair protocol)")
+    paths = []
+    for stem, (table, caption) in tables.items():
+        paths += write_tables(table, out_dir, stem, caption, report=title)
     figures = []
     for protocol in result.config.protocols:
         figures += save_figure(order_figure(result, protocol, title), out_dir, f"order_{protocol}")
@@ -145,7 +164,8 @@ def report_markdown(result: StudyResult, title: str) -> str:
         "denoised data, FOS on raw data; fair protocol: every method on raw data. Errors are "
         "one-step prediction errors on the prediction segment; outage metrics are free runs of "
         f"{cfg.horizon_s:g} s from {cfg.n_starts} starts across it.", "",
-        "## Comparison (FOS paper, Tables 1-2 layout)", "",
+        f"## Comparison at orders {' and '.join(map(str, table_orders(result)))} (FOS paper, "
+        "Tables 1-2 layout)", "",
         markdown_table(paper_table(result), digits=4), "",
         "## Best configuration per method (chosen on the evaluation segment)", "",
         markdown_table(study_table(result, result.best()), digits=4), "",

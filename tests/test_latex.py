@@ -1,0 +1,266 @@
+"""Every LaTeX table fosmodel writes compiles.
+
+Each kind of ``.tex`` (a study report, several studies, a residual-loop report, an Allan
+report, an IMU noise report, a FOSModel summary and a table of every special character) is
+made from small synthetic data and checked twice: by a strict structural check that always
+runs (braces, environments, special characters outside math mode, cells per row, booktabs
+rules, caption and label), and by ``pdflatex -halt-on-error`` inside a minimal document when
+pdflatex is installed (``.ci/run`` installs it where it can).
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.signal import lfilter
+
+from fosmodel.io.output import write_tables
+from fosmodel.loop.closeloop import LoopConfig, close_loop
+from fosmodel.loop.loop_report import write_loop_report
+from fosmodel.models.latex import latex_number, latex_table, latex_text, table_label
+from fosmodel.models.model import FOSModel
+from fosmodel.noise.allan import allan_deviation, fit_noise, write_allan
+from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
+from fosmodel.study.files import ColumnStudy, write_reports
+from fosmodel.study.harness import StudyConfig, plan_study
+from fosmodel.study.runner import run_study
+
+PDFLATEX = shutil.which("pdflatex")
+DOCUMENT = ("\\documentclass{article}\n\\usepackage{booktabs}\n\\begin{document}\n%s\n"
+            "\\end{document}\n")
+#: Characters that mean something to LaTeX in text mode.
+SPECIAL = set("&%$#_{}~^\\")
+#: A title with every special character and a unit, as a user may give it.
+TITLE = "gx_dps #1 (m/s^2, 5 % & $, {x} ~ back\\slash)"
+
+
+# -- the strict structural check -------------------------------------------------------------
+
+
+def _tokens(source: str):
+    """``(token, in_math)``: a control word (``\\caption``), a control symbol (``\\&``) or a
+    character, and whether it stands in math mode (between unescaped dollars)."""
+    in_math, i = False, 0
+    while i < len(source):
+        if source[i] == "\\":
+            word = re.match(r"\\([A-Za-z]+|.)", source[i:], re.DOTALL).group(0)
+            yield word, in_math
+            i += len(word)
+            continue
+        if source[i] == "$":
+            in_math = not in_math
+        else:
+            yield source[i], in_math
+        i += 1
+    assert not in_math, "a math mode is not closed"
+
+
+def structural_problems(source: str) -> list[str]:
+    """What would stop ``source`` from compiling, or break the table (empty when none)."""
+    problems, depth, envs, previous = [], 0, [], ""
+    for token, in_math in _tokens(source):
+        if token == "{":
+            # an argument's brace follows its command, or the argument before, at once
+            if not (in_math or previous.startswith("\\") and previous[1:].isalpha()
+                    or previous in ("}", "]")):
+                problems.append(f"a bare '{{' after {previous!r}")
+            depth += 1
+        elif token == "}":
+            depth -= 1
+            if depth < 0:
+                problems.append("a '}' closes nothing")
+        elif token in ("%", "#", "~") or token in ("_", "^") and not in_math:
+            problems.append(f"{token!r} unescaped" + (" in math mode" if in_math else ""))
+        elif token == "&" and in_math:
+            problems.append("'&' inside math mode")
+        previous = token
+    if depth:
+        problems.append(f"{depth} '{{' not closed")
+    for kind, name in re.findall(r"\\(begin|end)\{([^}]*)\}", source):
+        if kind == "begin":
+            envs.append(name)
+        elif not envs or envs.pop() != name:
+            problems.append(f"\\end{{{name}}} does not close the open environment")
+    problems += [f"\\begin{{{name}}} not closed" for name in envs]
+    return problems + _table_problems(source)
+
+
+def _table_problems(source: str) -> list[str]:
+    problems = []
+    tables = re.findall(r"\\begin\{table\}.*?\\end\{table\}", source, re.DOTALL)
+    if not tables:
+        problems.append("no table")
+    for table in tables:
+        if not re.search(r"\\caption\{.+\}", table):
+            problems.append("a table without a caption")
+        if not re.search(r"\\label\{tab:fosmodel-[a-z0-9-]+\}", table):
+            problems.append("a table without a tab:fosmodel- label")
+        spec, body = re.search(r"\\begin\{tabular\}\{([^}]*)\}(.*)\\end\{tabular\}", table,
+                               re.DOTALL).groups()
+        rules = re.findall(r"\\(toprule|midrule|bottomrule)", body)
+        if rules != ["toprule", "midrule", "bottomrule"]:
+            problems.append(f"rules {rules}, not top, mid and bottom")
+        columns = len(re.findall(r"[lrc]|p\{[^}]*\}", spec))
+        for row in re.split(r"\\\\\s*\n", re.sub(r"\\(toprule|midrule|bottomrule)", "", body)):
+            if row.strip():
+                cells = 1 + sum(token == "&" for token, in_math in _tokens(row) if not in_math)
+                if cells != columns:
+                    problems.append(f"{cells} cells where the spec {spec!r} has {columns}: "
+                                    f"{row.strip()[:60]}")
+    return problems
+
+
+def _compile(source: str, workdir: Path) -> None:
+    tex = workdir / "check.tex"
+    tex.write_text(DOCUMENT % source)
+    run = subprocess.run([PDFLATEX, "-halt-on-error", "-interaction=nonstopmode", tex.name],
+                         cwd=workdir, capture_output=True, text=True, timeout=120,
+                         stdin=subprocess.DEVNULL)
+    errors = [line for line in run.stdout.splitlines() if line.startswith("!")]
+    assert run.returncode == 0 and (workdir / "check.pdf").exists(), errors or run.stdout[-800:]
+
+
+# -- every kind of .tex fosmodel writes ------------------------------------------------------
+
+
+def _ar(n: int, seed: int) -> np.ndarray:
+    e = np.random.default_rng(seed).standard_normal(n + 500)
+    return lfilter([1.0], [1.0, -0.8, 0.3], e)[500:]
+
+
+def _study_config() -> StudyConfig:
+    return StudyConfig(rate=10.0, sensor="accel", units="m/s^2", orders=(1, 2, 3), degrees=(1,),
+                       train_s=200.0, evaluate_s=200.0, n_starts=3)
+
+
+def _special_table(out: Path) -> list[Path]:
+    frame = pd.DataFrame({
+        "gx_dps": [1e-05, -2.5, np.nan, np.inf], "N (deg/s/sqrt(Hz))": [1, -2, 300000, 4],
+        "text & more": ["a_b^c", "50 % of #1", "{braces} ~ $5", "back\\slash"],
+        "mixed": [None, 0.25, "y[n-1]^2", True]})
+    paths = write_tables(frame, out, "special", "Every special character: _ ^ % & # $ { } ~ \\",
+                         report=TITLE)
+    return [p for p in paths if p.suffix == ".tex"]
+
+
+def _studies(out: Path, seeds: tuple[int, ...]) -> list[Path]:
+    """The report of one study (``--columns`` of one file) or of several."""
+    config, studies, results = _study_config(), [], []
+    for seed in seeds:
+        y = _ar(6000, seed) * 0.01
+        studies.append(ColumnStudy(f"imu{seed}.csv", "ay_mps2", f"imu{seed}_ay_mps2",
+                                   plan_study(y, config)))
+        results.append(run_study(y, config))
+    write_reports(studies, results, out, TITLE)
+    return sorted(out.rglob("*.tex"))
+
+
+def _loop(out: Path) -> list[Path]:
+    n, rate = 12_000, 50.0
+    temp = np.linspace(20.0, 30.0, n)
+    y = 0.05 * _ar(n, 3) + 0.02 * (temp - 25.0) ** 2
+    result = close_loop(y, {"temp_c": temp}, LoopConfig(rate=rate, sensor="gyro", units="deg/s"))
+    write_loop_report(result, out, TITLE)
+    return sorted(out.glob("*.tex"))
+
+
+def _allan(out: Path) -> list[Path]:
+    rng = np.random.default_rng(4)
+    y = 0.01 * rng.standard_normal(20_000) + np.cumsum(1e-4 * rng.standard_normal(20_000))
+    result = allan_deviation(y, 100.0, units="deg/s", sensor="gyro")
+    write_allan(result, fit_noise(result), out, TITLE)
+    return sorted(out.glob("*.tex"))
+
+
+def _imu(out: Path) -> list[Path]:
+    rng = np.random.default_rng(5)
+    columns = {"gx_dps": 0.01 * rng.standard_normal(20_000),
+               "ax_mps2": 0.002 * rng.standard_normal(20_000)}
+    axes = [Axis("gx_dps", "gyro", "deg/s", "given"), Axis("ax_mps2", "accel", "m/s^2", "given")]
+    write_imu_noise(imu_noise(columns, axes, 100.0, "imu.csv"), out, TITLE)
+    return sorted(out.rglob("*.tex"))
+
+
+def _summary(out: Path) -> list[Path]:
+    model = FOSModel(max_lag=3, degree=2, stop="max_terms", max_terms=4).fit(_ar(3000, 6))
+    path = out / "summary.tex"
+    out.mkdir(parents=True, exist_ok=True)
+    path.write_text(model.summary().as_latex())
+    return [path]
+
+
+WRITERS = {"special": _special_table, "study": lambda out: _studies(out, (0,)),
+           "studies": lambda out: _studies(out, (1, 2)), "loop": _loop,
+           "allan": _allan, "imu": _imu, "summary": _summary}
+EXPECTED = {"special": {"special"}, "study": {"comparison", "study", "best", "level"},
+            "studies": {"best", "comparison", "study", "level"},
+            "loop": {"effects", "diagnostics"}, "allan": {"allan", "noise"},
+            "imu": {"noise", "noise_si", "allan"}, "summary": {"summary"}}
+
+
+@pytest.fixture(scope="module", params=sorted(WRITERS))
+def tex_files(request, tmp_path_factory) -> list[Path]:
+    out = tmp_path_factory.mktemp(request.param)
+    files = WRITERS[request.param](out)
+    assert {p.stem for p in files} == EXPECTED[request.param]
+    return files
+
+
+def test_every_table_passes_the_strict_check(tex_files):
+    for path in tex_files:
+        assert structural_problems(path.read_text()) == [], path
+
+
+@pytest.mark.skipif(PDFLATEX is None, reason="pdflatex is not installed (.ci/run installs it "
+                    "with apt-get where it runs as root); the strict check still ran")
+def test_every_table_compiles_with_pdflatex(tex_files, tmp_path):
+    for i, path in enumerate(tex_files):
+        workdir = tmp_path / str(i)
+        workdir.mkdir()
+        _compile(path.read_text(), workdir)
+
+
+# -- the check bites, and the helpers say what they do ----------------------------------------
+
+
+@pytest.mark.parametrize(("broken", "problem"), [
+    ("x_y", "'_' unescaped"), ("50 %", "'%' unescaped"), ("a^2", "'^' unescaped"),
+    ("#1", "'#' unescaped"), ("{x}", "a bare '{'"), ("a & b", "cells where the spec"),
+    ("$x", "a math mode is not closed"), ("\\begin{center}", "not closed")])
+def test_the_strict_check_finds_what_would_not_compile(broken, problem):
+    good = latex_table(pd.DataFrame({"a": ["x"], "b": [1.0]}), "caption", table_label("t"))
+    assert structural_problems(good) == []
+    bad = good.replace("x & 1", f"{broken} & 1")
+    found = (structural_problems(bad) if problem != "a math mode is not closed"
+             else pytest.raises(AssertionError, structural_problems, bad).value.args)
+    assert any(problem in text for text in found), found
+
+
+def test_units_numbers_and_labels():
+    assert latex_text("MSE (m/s^2)^2") == "MSE (m/s$^{2}$)$^{2}$"
+    assert latex_text("deg/h/sqrt(h)") == r"deg/h/$\sqrt{\mathrm{h}}$"
+    assert latex_text("gx_dps 5 % a^b") == r"gx\_dps 5 \% a\textasciicircum{}b"
+    assert [latex_number(v) for v in (1e-05, -0.25, 123456.0, 0.001234, np.nan)] == [
+        r"$1\times10^{-5}$", "$-0.25$", r"$1.235\times10^{5}$", "0.001234", "--"]
+    assert table_label("Table 1: accel_y (m/s^2)", "comparison") == (
+        "tab:fosmodel-table-1-accel-y-m-s-2-comparison")
+
+
+def test_the_tables_have_booktabs_rules_a_caption_and_the_reports_label(tmp_path):
+    (path,) = _special_table(tmp_path)
+    text = path.read_text()
+    assert text.startswith("\\begin{table}[htbp]\n\\caption{Every special character: "
+                           "\\_ \\textasciicircum{} \\% \\& \\# \\$ \\{ \\} "
+                           "\\textasciitilde{} \\textbackslash{}}\n"
+                           "\\label{tab:fosmodel-gx-dps-1-m-s-2-5-x-back-slash-special}\n"
+                           "\\begin{tabular}{rrll}\n\\toprule\n")
+    assert "gx\\_dps & N (deg/s/$\\sqrt{\\mathrm{Hz}}$) & text \\& more & mixed \\\\\n" in text
+    assert "$1\\times10^{-5}$ & 1 & a\\_b\\textasciicircum{}c & -- \\\\" in text
+    assert "-- & 300000 & \\{braces\\} \\textasciitilde{} \\$5 & y[n-1]$^{2}$ \\\\" in text
+    assert "$\\infty$ & 4 & back\\textbackslash{}slash & yes \\\\\n\\bottomrule" in text
