@@ -101,22 +101,23 @@ class SplitSpec:
             Not two positive lengths with units (a bare number is refused: seconds or a
             fraction?), or percents that leave nothing to predict.
         """
-        lengths = [_length(part) for part in text.split(",")]
-        if len(lengths) != 2 or None in lengths:
+        parsed = [_length(part) for part in text.split(",")]
+        lengths = [length for length in parsed if length is not None]
+        if len(parsed) != 2 or len(lengths) != 2:
             raise InputError(f"expected TRAIN,EVALUATE with units: durations like 180s,180s "
                              f"(s, min or h) or percents of the record like 50%,20%, got {text!r}")
         percent = sum(value for value, unit in lengths if unit == "%")
         if percent >= 100:
             raise InputError(f"the split {text!r} takes {percent:g}% of the record for training "
                              "and evaluation and leaves nothing to predict")
-        return cls(*lengths)
+        return cls(lengths[0], lengths[1])
 
     def seconds(self, n: int, rate: float) -> tuple[float, float]:
-        """The training and evaluation durations in a record of ``n`` samples at ``rate`` Hz."""
+        """Return the training and evaluation durations of ``n`` samples at ``rate`` Hz."""
         return _seconds(self.train, n, rate), _seconds(self.evaluate, n, rate)
 
     def fractions(self, n: int, rate: float) -> tuple[float, float]:
-        """The training and evaluation fractions of a record of ``n`` samples at ``rate`` Hz.
+        """Return the training and evaluation fractions of a record of ``n`` samples at ``rate`` Hz.
 
         Raises
         ------
@@ -131,16 +132,19 @@ class SplitSpec:
         return train, evaluate
 
     def __str__(self) -> str:
+        """Write the split as it is parsed: ``180s,180s``, ``50%,20%``."""
         return ",".join(f"{value:g}{unit}" for value, unit in (self.train, self.evaluate))
 
 
 def _length(text: str) -> tuple[float, str] | None:
     """``(value, unit)`` of a positive length like ``180s``, ``3min`` or ``50%``, else None."""
     match = re.fullmatch(r"\s*(.+?)\s*(s|min|h|%)\s*", text)
+    if match is None:
+        return None
     try:
-        value = float(match[1]) if match else math.nan
+        value = float(match[1])
     except ValueError:
-        value = math.nan
+        return None
     return (value, match[2]) if math.isfinite(value) and value > 0 else None
 
 

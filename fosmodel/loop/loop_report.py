@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import textwrap
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -18,8 +19,10 @@ from .judge import MIN_GAIN, MIN_HALF_WINDOWS
 
 
 def effects_table(result: LoopResult) -> pd.DataFrame:
-    """Prediction-segment metrics before the loop and after each effect it kept, with what
-    each effect made worse there (more than 2 %)."""
+    """Tabulate the prediction-segment metrics before the loop and after each effect it kept.
+
+    Each row also says what the effect made worse there (more than 2 %).
+    """
     taus = list(result.before["bias_rms"])
     rows = [("before (starting model)", "", "", result.before, "")]
     previous = result.before
@@ -60,13 +63,15 @@ def findings_table(before: list[Finding], after: list[Finding]) -> pd.DataFrame:
 
 #: How the first (before) and the final (after) model are drawn: the first wide and grey, the
 #: final thin, blue and dashed over it, so both show where they coincide.
-_STYLES = {"before": {"color": "0.6", "lw": 2.6, "ls": "-"},
+_STYLES: dict[str, dict[str, Any]] = {"before": {"color": "0.6", "lw": 2.6, "ls": "-"},
            "after": {"color": "C0", "lw": 1.1, "ls": "--"}}
 
 
 def residual_figure(result: LoopResult, title: str) -> Figure:
-    """Residual diagnostics of the first (wide, grey) and the final (thin, blue) model, every
-    panel with its axes' labels."""
+    """Plot the residual diagnostics of the first (wide, grey) and the final (thin, blue) model.
+
+    Every panel has its axes' labels.
+    """
     fig = Figure(figsize=(16, 7.5), layout="constrained")
     axes = fig.subplots(2, 4).ravel()
     rate = result.config.rate
@@ -130,6 +135,7 @@ def _panels(units: str) -> list[tuple[str, str, str]]:
 
 
 def result_residual(result: LoopResult, label: str) -> np.ndarray:
+    """Return the residual of the first (``label`` "before") or the final model."""
     return result.residual_before if label == "before" else result.residual_after
 
 
@@ -183,6 +189,7 @@ def write_loop_report(result: LoopResult, out_dir: Path, title: str) -> list[Pat
 
 def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
                     diagnostics: pd.DataFrame) -> str:
+    """Write the loop's report as Markdown: its setting, effects, diagnostics and outcome."""
     cfg, seg = result.config, result.segments
     spans = ", ".join(f"{k} {s.start / cfg.rate:g}-{s.stop / cfg.rate:g} s" for k, s in seg.items())
     origins = ", ".join(f"{o:g}" for o in _origins(result)) or "the fitting segment's end"
@@ -220,8 +227,11 @@ def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
 
 
 def evaluation_text(ev: dict) -> str:
-    """A candidate's evaluation in words: each test's gain, p-value and, when judged, its
-    gains on the two halves of the segment and from the earlier origins."""
+    """Put a candidate's evaluation in words.
+
+    Each test's gain, p-value and, when judged, its gains on the two halves of the segment
+    and from the earlier origins.
+    """
     parts = []
     for name, label in (("one_step", "one-step"), ("outage", "outage bias")):
         text = f"{label} gain {ev[f'{name}_gain']:.2g} (p {ev[f'{name}_p']:.2g}"
@@ -244,7 +254,7 @@ def _origins(result: LoopResult) -> list[float]:
 
 
 def _verdict_line(result: LoopResult) -> str:
-    """The outcome on the prediction segment, in one plain sentence."""
+    """Say the outcome on the prediction segment in one plain sentence."""
     if not result.steps:
         return "No effect survived the evaluation: the final model is the starting model."
     b, a = result.before, result.after
@@ -263,9 +273,11 @@ def _verdict_line(result: LoopResult) -> str:
 
 
 def still_firing(result: LoopResult) -> list[str]:
-    """The tests that still fire on the final model, each with where it fires: an auxiliary
-    channel with its lag, a periodic test with its frequency, the nonlinear test with its
-    strongest product, ..."""
+    """List the tests that still fire on the final model, each with where it fires.
+
+    An auxiliary channel with its lag, a periodic test with its frequency, the nonlinear test
+    with its strongest product, ...
+    """
     return [describe_finding(f) for f in result.findings_after if f.fired]
 
 
@@ -288,7 +300,7 @@ _MODEL_WIDTH = 38
 
 
 def console_summary(result: LoopResult, width: int = CONSOLE_WIDTH) -> str:
-    """The loop's outcome for a terminal, every line at most ``width`` characters.
+    """Write the loop's outcome for a terminal, every line at most ``width`` characters.
 
     A row per model (the starting one, then after each effect kept) with the number of terms
     the effect added (the report lists them) and the main prediction-segment numbers, an

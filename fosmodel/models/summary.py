@@ -28,6 +28,7 @@ class Summary:
     notes: list[str] = field(default_factory=list)
 
     def __str__(self) -> str:
+        """Return the summary as fixed-width text, statsmodels-style."""
         rule = "=" * _WIDTH
         lines = [self.title.center(_WIDTH), rule]
         half = (len(self.info) + 1) // 2
@@ -45,9 +46,11 @@ class Summary:
         return "\n".join(lines)
 
     def to_frame(self) -> pd.DataFrame:
+        """Return a copy of the table."""
         return self.table.copy()
 
     def as_markdown(self) -> str:
+        """Return the title, the facts, the table and the notes as Markdown."""
         head = "\n".join(f"- **{k}**: {v}" for k, v in self.info)
         notes = "\n".join(f"{i + 1}. {n}" for i, n in enumerate(self.notes))
         body = f"### {self.title}\n\n{head}\n\n{markdown_table(self.table)}"
@@ -55,7 +58,7 @@ class Summary:
 
 
     def as_html(self) -> str:
-        """The title, the facts, the table and the notes as HTML."""
+        """Return the title, the facts, the table and the notes as HTML."""
         facts = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>"
                         for k, v in self.info)
         notes = "".join(f"<li>{html.escape(n)}</li>" for n in self.notes)
@@ -67,10 +70,12 @@ class Summary:
         return self.as_html()
 
     def as_latex(self) -> str:
-        """The facts and the table as two LaTeX tables by
-        :func:`~fosmodel.models.latex.latex_table` (booktabs rules, a caption, the labels
-        ``tab:fosmodel-<title>-facts`` and ``tab:fosmodel-<title>``), the notes as an
-        ``enumerate``; every special character escaped, units typeset."""
+        """Return the facts and the table as two LaTeX tables, the notes as an ``enumerate``.
+
+        The tables come from :func:`~fosmodel.models.latex.latex_table` (booktabs rules, a
+        caption, the labels ``tab:fosmodel-<title>-facts`` and ``tab:fosmodel-<title>``);
+        every special character is escaped, units are typeset.
+        """
         facts = pd.DataFrame(self.info, columns=["Fact", "Value"])
         notes = "\n".join(f"\\item {latex_text(n)}" for n in self.notes)
         return "\n".join([
@@ -80,7 +85,7 @@ class Summary:
 
 
 def markdown_table(frame: pd.DataFrame, digits: int = 6) -> str:
-    """A pipe table; floats with ``digits`` significant digits, NaN as an empty cell."""
+    """Write a pipe table; floats with ``digits`` significant digits, NaN as an empty cell."""
     cols = [str(c) for c in frame.columns]
     rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for rec in frame.itertuples(index=False):
