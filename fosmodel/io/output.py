@@ -135,8 +135,9 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
     tmp = _temporary_name(path, ".tmp")
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
     try:
-        text = {"encoding": "utf-8", "newline": ""} if mode == "w" else {}
-        with os.fdopen(fd, mode, **text) as fh:
+        fh = (os.fdopen(fd, "w", encoding="utf-8", newline="") if mode == "w"
+              else os.fdopen(fd, "wb"))
+        with fh:
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
@@ -154,7 +155,7 @@ def write_text(path: str | os.PathLike[str], text: str) -> None:
 
 
 def _mode() -> int:
-    """The permission bits of a new file under the process's umask (0666 & ~umask)."""
+    """Return the permission bits of a new file under the process's umask (0666 & ~umask)."""
     umask = os.umask(0)
     os.umask(umask)
     return 0o666 & ~umask
@@ -163,7 +164,7 @@ def _mode() -> int:
 @contextlib.contextmanager
 def report_directory(out: str | os.PathLike[str],
                      protected: Iterable[str | os.PathLike[str]] = ()) -> Iterator[Path]:
-    """A fresh directory to write a report into, published onto ``out`` on success.
+    """Give a fresh directory to write a report into, published onto ``out`` on success.
 
     The directory is created beside ``out``; when the body returns, every file
     in it is checked against ``protected`` (the inputs) and the whole is moved
@@ -188,8 +189,10 @@ def report_directory(out: str | os.PathLike[str],
 
 
 def publish(tmp: Path, out: Path, protected: Iterable[str | os.PathLike[str]] = ()) -> None:
-    """Move the files of ``tmp`` onto ``out``, after checking none replaces a ``protected``
-    file (InputError naming it; nothing moved)."""
+    """Move the files of ``tmp`` onto ``out``, after checking none replaces a ``protected`` file.
+
+    A file that would is named in an InputError, and nothing is moved.
+    """
     protected = list(protected)
     for item in tmp.rglob("*"):
         target = out / item.relative_to(tmp)
@@ -249,8 +252,10 @@ FIGURE_DPI = 300
 
 
 def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
-    """``stem.png`` (at :data:`FIGURE_DPI`) and ``stem.svg`` in ``out_dir``, each written
-    atomically, after :func:`plain_log_ticks`."""
+    """Write ``stem.png`` (at :data:`FIGURE_DPI`) and ``stem.svg`` in ``out_dir``.
+
+    Each is written atomically, after :func:`plain_log_ticks`.
+    """
     plain_log_ticks(fig)
     paths = []
     for ext in ("png", "svg"):
@@ -262,15 +267,15 @@ def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
 
 
 def plain_log_ticks(fig: Figure) -> None:
-    """Plain tick labels (``0.02``, ``0.05``, ``0.1``) on every log axis of ``fig`` that spans
-    less than two decades.
+    """Label every log axis of ``fig`` that spans less than two decades in plain numbers.
+
+    Plain tick labels are ``0.02``, ``0.05``, ``0.1``.
 
     Left to itself matplotlib labels such an axis with powers of ten at the minor ticks, or,
     when no minor tick falls in view, with linear ticks such as ``1.22x10^1``.  Here the major
-    ticks go to 1, 2 and 5 times the powers of ten (and 3 within one decade; the locator falls
-    back to linear ticks inside a narrower view by itself) and every label is the number in
-    positional notation (``0.00002``, never ``2e-05``); an axis spanning more keeps its labels
-    at the powers of ten.
+    ticks go to 1, 2 and 5 times the powers of ten over one to two decades and to evenly spaced
+    round numbers within one decade, and every label is the number in positional notation
+    (``0.00002``, never ``2e-05``); an axis spanning more keeps its labels at the powers of ten.
     """
     from matplotlib import ticker  # here: writing tables or text needs no matplotlib
 
@@ -279,13 +284,14 @@ def plain_log_ticks(fig: Figure) -> None:
             low, high = sorted(limits)
             if axis.get_scale() != "log" or low <= 0 or math.log10(high / low) >= 2:
                 continue
-            subs = (1.0, 2.0, 5.0) if high / low >= 10 else (1.0, 2.0, 3.0, 5.0)
-            axis.set_major_locator(ticker.LogLocator(base=10, subs=subs))
+            axis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0))
+                                   if high / low >= 10 else
+                                   ticker.MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]))
             axis.set_major_formatter(ticker.FuncFormatter(_plain_number))
             axis.set_minor_formatter(ticker.NullFormatter())
 
 
 def _plain_number(value: float, _position: int | None = None) -> str:
-    """A tick value to three significant digits, without an exponent."""
+    """Format a tick value to three significant digits, without an exponent."""
     return np.format_float_positional(value, precision=3, unique=True, fractional=False,
                                       trim="-")
