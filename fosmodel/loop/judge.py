@@ -33,13 +33,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from scipy import stats
 
 from ..models.bound import BoundModel
-from ..noise.metrics import FreeRunModel, free_run_errors
+from ..noise.metrics import OneStepModel, free_run_errors
 
 MAX_WINDOWS = 100  # most outage windows of the evaluation test
 MIN_HALF_WINDOWS = 20  # outage windows in each half of the evaluation segment to judge it
@@ -58,13 +57,6 @@ class Forecasts:
     outage: np.ndarray  # (windows, samples)
 
 
-class Forecaster(FreeRunModel, Protocol):
-    """A model that predicts one step ahead and runs free: FOSModel, a baseline, a BoundModel."""
-
-    def predict(self, y: np.ndarray) -> np.ndarray:
-        """Return the one-step prediction of ``y``, aligned with it."""
-
-
 def outage_windows(segment: slice, horizon: int) -> np.ndarray:
     """Return the starts of consecutive outage windows of ``horizon`` samples in ``segment``.
 
@@ -76,7 +68,7 @@ def outage_windows(segment: slice, horizon: int) -> np.ndarray:
     return starts
 
 
-def forecasts(model: Forecaster, y: np.ndarray, segment: slice, starts: np.ndarray,
+def forecasts(model: OneStepModel, y: np.ndarray, segment: slice, starts: np.ndarray,
               horizon: int) -> Forecasts:
     """Return the one-step and outage errors of ``model`` on ``segment`` of the record ``y``."""
     stop = segment.stop

@@ -1,13 +1,13 @@
-"""LaTeX for papers: escaped text with typeset units, numbers, and booktabs tables.
+r"""LaTeX for papers: escaped text with typeset units, numbers, and booktabs tables.
 
 Every LaTeX table fosmodel writes goes through :func:`latex_table` (reports through
 :func:`fosmodel.io.output.write_tables`, fit summaries through
 :meth:`fosmodel.models.summary.Summary.as_latex`): a ``table`` float with a caption and a
-stable label (:func:`table_label`), booktabs rules (``\\toprule``, ``\\midrule``,
-``\\bottomrule``), text with LaTeX's special characters escaped and units typeset
+stable label (:func:`table_label`), booktabs rules (``\toprule``, ``\midrule``,
+``\bottomrule``), text with LaTeX's special characters escaped and units typeset
 (:func:`latex_text`: ``m/s^2`` as ``m/s$^{2}$``, ``deg/sqrt(h)`` as
-``deg/$\\sqrt{\\mathrm{h}}$``) and numbers to four significant digits with powers of ten in
-math mode (:func:`latex_number`: ``1e-05`` as ``$1\\times10^{-5}$``).  The tables need the
+``deg/$\sqrt{\mathrm{h}}$``) and numbers to four significant digits with powers of ten in
+math mode (:func:`latex_number`: ``1e-05`` as ``$1\times10^{-5}$``).  The tables need the
 ``booktabs`` package.  :func:`mathtext_units` types the same units for matplotlib's labels, so
 a unit reads one way in the figures and the tables.
 """
@@ -29,8 +29,10 @@ _UNIT_MARKUP = re.compile(r"\^(?:\{(?P<braced>[-+]?[\w./]+)\}|(?P<power>[-+]?\d+
 
 
 def latex_escape(text: str) -> str:
-    """``text`` with LaTeX's special characters escaped (``_`` as ``\\_``, ``^`` as
-    ``\\textasciicircum{}``, ...)."""
+    r"""Escape LaTeX's special characters in ``text``.
+
+    ``_`` becomes ``\_``, ``^`` becomes ``\textasciicircum{}``, ...
+    """
     return "".join(_LATEX_SPECIAL.get(c, c) for c in text)
 
 
@@ -49,29 +51,35 @@ def _pieces(text: str) -> list[tuple[bool, str]]:
 
 
 def latex_text(text: str) -> str:
-    """``text`` for LaTeX's text mode: powers and square roots of units in math mode, every
-    other special character escaped.
+    r"""Write ``text`` for LaTeX's text mode: units' powers and square roots in math mode.
+
+    Every other special character is escaped.
 
     Examples
     --------
     >>> latex_text("MSE (m/s^2)^2")
     'MSE (m/s$^{2}$)$^{2}$'
     >>> latex_text("N (deg/s/sqrt(Hz)) of gx_dps, 5 %")
-    'N (deg/s/$\\\\sqrt{\\\\mathrm{Hz}}$) of gx\\\\_dps, 5 \\\\%'
+    'N (deg/s/$\\sqrt{\\mathrm{Hz}}$) of gx\\_dps, 5 \\%'
     """
     return "".join(f"${piece}$" if math_ else latex_escape(piece) for math_, piece in _pieces(text))
 
 
 def mathtext_units(text: str) -> str:
-    """``text`` for a matplotlib label: powers and square roots of units typeset as in
-    :func:`latex_text` (``m/s^2`` as ``m/s$^{2}$``); a dollar sign stays a dollar sign."""
+    """Write ``text`` for a matplotlib label, its units typeset as by :func:`latex_text`.
+
+    ``m/s^2`` becomes ``m/s$^{2}$``; a dollar sign stays a dollar sign.
+    """
     return "".join(f"${piece}$" if math_ else piece.replace("$", r"\$")
                    for math_, piece in _pieces(text))
 
 
 def latex_number(value: float, digits: int = 4) -> str:
-    """A number to ``digits`` significant digits: a power of ten and a minus sign in math
-    mode (``$1.5\\times10^{-5}$``, ``$-0.25$``), NaN as ``--``, infinity as ``$\\infty$``."""
+    r"""Write a number to ``digits`` significant digits for LaTeX.
+
+    A power of ten and a minus sign go in math mode (``$1.5\times10^{-5}$``, ``$-0.25$``),
+    NaN is ``--``, infinity ``$\infty$``.
+    """
     if math.isnan(value):
         return "--"
     if math.isinf(value):
@@ -83,8 +91,10 @@ def latex_number(value: float, digits: int = 4) -> str:
 
 
 def latex_cell(value: object, digits: int = 4) -> str:
-    """One table cell: a number by :func:`latex_number`, None as ``--``, anything else as
-    text by :func:`latex_text`."""
+    """Write one table cell: a number by :func:`latex_number`, None as ``--``.
+
+    Anything else is text, by :func:`latex_text`.
+    """
     if value is None:
         return "--"
     if isinstance(value, bool):
@@ -97,14 +107,16 @@ def latex_cell(value: object, digits: int = 4) -> str:
 
 
 def table_label(*parts: str) -> str:
-    """``tab:fosmodel-<parts>``: a LaTeX label made of the parts' letters and digits, the
-    rest as hyphens, so it is the same for every run of the same report."""
+    """Return ``tab:fosmodel-<parts>``, a LaTeX label of the parts' letters and digits.
+
+    The rest are hyphens, so the label is the same for every run of the same report.
+    """
     slug = re.sub(r"[^a-z0-9]+", "-", "-".join(parts).lower()).strip("-")
     return f"tab:fosmodel-{slug}" if slug else "tab:fosmodel"
 
 
 def latex_table(frame: pd.DataFrame, caption: str, label: str, digits: int = 4) -> str:
-    """``frame`` as a LaTeX ``table`` float with booktabs rules, a caption and a label.
+    r"""Write ``frame`` as a LaTeX ``table`` float with booktabs rules, a caption and a label.
 
     Parameters
     ----------
@@ -113,14 +125,14 @@ def latex_table(frame: pd.DataFrame, caption: str, label: str, digits: int = 4) 
     caption : str
         Plain text; escaped here.
     label : str
-        The ``\\label`` (see :func:`table_label`).
+        The ``\label`` (see :func:`table_label`).
     digits : int, default 4
         Significant digits of the numbers.
 
     Returns
     -------
     str
-        The LaTeX source, ending in a newline; it needs ``\\usepackage{booktabs}``.
+        The LaTeX source, ending in a newline; it needs ``\usepackage{booktabs}``.
     """
     spec = "".join("r" if pd.api.types.is_numeric_dtype(dtype) and
                    not pd.api.types.is_bool_dtype(dtype) else "l" for dtype in frame.dtypes)

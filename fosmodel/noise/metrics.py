@@ -25,6 +25,7 @@ from collections.abc import Iterable
 from typing import Protocol
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.exceptions import InputError, UnstableModelWarning
 from ..core.validation import as_signal, check_positive, did_you_mean
@@ -50,6 +51,13 @@ class FreeRunModel(Protocol):
 
     def simulate(self, y_init: np.ndarray, n_steps: int) -> np.ndarray:
         """Free-run continuation of ``y_init``, ``n_steps`` samples."""
+
+
+class OneStepModel(FreeRunModel, Protocol):
+    """A model that also predicts one step ahead: FOSModel, a baseline, a bound model."""
+
+    def predict(self, y: np.ndarray) -> np.ndarray:
+        """Return the one-step prediction of ``y``, aligned with it."""
 
 
 # -- units and the paper's equivalent position error ----------------------------------
@@ -81,7 +89,7 @@ def to_si_scale(sensor: str, units: str) -> float:
 
 
 def sensor_of(units: str) -> str:
-    """The sensor that reads in ``units``: no unit belongs to both.
+    """Return the sensor that reads in ``units``: no unit belongs to both.
 
     Examples
     --------
@@ -105,7 +113,7 @@ def sensor_of(units: str) -> str:
 def equivalent_position_error(
     mse: float, sensor: str, units: str, horizon_s: float = 3600.0, g: float = PAPER_GRAVITY
 ) -> float:
-    """The FOS paper's position error (m) of a model MSE after ``horizon_s`` seconds.
+    """Return the FOS paper's position error (m) of a model MSE after ``horizon_s`` seconds.
 
     With ``s = sqrt(mse)`` in SI units and ``T = horizon_s``: accelerometer
     ``0.5 s T^2``; gyroscope ``g s T^3 / 6`` (s in rad/s), i.e. a constant error of
@@ -177,7 +185,7 @@ def outage_starts(start: int, stop: int, n_steps: int, count: int = 20) -> np.nd
 
 
 def free_run_errors(
-    model: FreeRunModel, y: object, starts: Iterable[int], n_steps: int
+    model: FreeRunModel, y: ArrayLike, starts: Iterable[int], n_steps: int
 ) -> np.ndarray:
     """Free-run errors ``y[s:s+n_steps] - model.simulate(y[:s], n_steps)`` for each start.
 
@@ -223,12 +231,12 @@ def _hold_weights(n_steps: int, rate: float, order: int) -> np.ndarray:
     """
     r = np.arange(n_steps, 0, -1, dtype=float)  # (H - a) * rate for each sample
     # r^m - (r-1)^m as a sum of positive terms: no cancellation for long rows
-    diff = sum(r**i * (r - 1.0) ** (order - 1 - i) for i in range(order))
+    diff = sum((r**i * (r - 1.0) ** (order - 1 - i) for i in range(order)), np.zeros_like(r))
     return diff / (math.factorial(order) * rate**order)
 
 
 def integrated_position_error(
-    errors: object, rate: float, sensor: str, units: str, g: float = PAPER_GRAVITY
+    errors: ArrayLike, rate: float, sensor: str, units: str, g: float = PAPER_GRAVITY
 ) -> np.ndarray:
     """Position error (m) at the end of each outage row of sensor-error samples.
 
@@ -272,7 +280,7 @@ def integrated_position_error(
     return np.asarray(e @ _hold_weights(e.shape[-1], rate, 3) * (scale * check_positive(g, "g")))
 
 
-def bias_rms(residual: object, rate: float, tau_s: float) -> float:
+def bias_rms(residual: ArrayLike, rate: float, tau_s: float) -> float:
     """RMS of the means of ``residual`` over non-overlapping windows of ``tau_s`` seconds.
 
     A window holds ``round(tau_s * rate)`` samples; the incomplete window at the end
@@ -323,8 +331,8 @@ def _segment_bounds(segment: slice, length: int) -> tuple[int, int]:
 
 
 def outage_metrics(
-    model: FreeRunModel,
-    y: object,
+    model: OneStepModel,
+    y: ArrayLike,
     rate: float,
     sensor: str | None,
     units: str | None,
@@ -332,7 +340,7 @@ def outage_metrics(
     horizon_s: float = 30.0,
     n_starts: int = 20,
     taus: Iterable[float] = (1.0, 10.0, 30.0),
-    residual: object | None = None,
+    residual: ArrayLike | None = None,
     g: float = PAPER_GRAVITY,
 ) -> dict:
     """Outage (free-run) errors, their position error, and the residual's bias RMS.
@@ -380,7 +388,11 @@ def outage_metrics(
     if n_steps < 1:
         raise InputError(f"horizon_s={horizon_s} s is shorter than one sample at {rate} Hz")
     errors = free_run_errors(model, y, outage_starts(start, stop, n_steps, n_starts), n_steps)
-    position = None if sensor is None else integrated_position_error(errors, rate, sensor, units, g)
+    position = None
+    if sensor is not None:
+        if units is None:
+            raise InputError(f"the position error of a {sensor} needs its units")
+        position = integrated_position_error(errors, rate, sensor, units, g)
     if residual is None:
         residual = (y - np.asarray(model.predict(y), dtype=float))[start:stop]
     residual = np.asarray(residual, dtype=float)
@@ -397,7 +409,7 @@ def outage_metrics(
     }
 
 
-def one_step_mse(y: object, prediction: object, segment: slice) -> float:
+def one_step_mse(y: ArrayLike, prediction: ArrayLike, segment: slice) -> float:
     """Mean squared one-step error ``y - prediction`` over ``segment``.
 
     Raises

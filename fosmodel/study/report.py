@@ -43,7 +43,7 @@ def study_table(result: StudyResult, frame: pd.DataFrame | None = None) -> pd.Da
 
 
 def paper_table(result: StudyResult, orders: tuple[int, ...] | None = None) -> pd.DataFrame:
-    """The paper's Table 1/2 layout: per model order, every method and the data it was fit on.
+    """Lay out the paper's Table 1/2: per model order, every method and the data it was fit on.
 
     The orders default to the lowest and the highest the study fitted (:func:`table_orders`).
     FOS is fit on the raw data under both protocols, so it appears once; the
@@ -68,7 +68,7 @@ def paper_table(result: StudyResult, orders: tuple[int, ...] | None = None) -> p
 
 
 def table_orders(result: StudyResult) -> tuple[int, ...]:
-    """The orders of the comparison table: the lowest and the highest of the study."""
+    """Return the orders of the comparison table: the lowest and the highest of the study."""
     return tuple(sorted({min(result.config.orders), max(result.config.orders)}))
 
 
@@ -151,7 +151,7 @@ def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
 
 
 def report_markdown(result: StudyResult, title: str) -> str:
-    """The study as one Markdown page: setup, comparison table, best rows, figures, warnings."""
+    """Write the study as one Markdown page: setup, comparison, best rows, figures, warnings."""
     cfg, split = result.config, result.split
     n = split.predict.stop
     lines = [
