@@ -42,7 +42,9 @@ from typing import Any
 import allantools
 import numpy as np
 import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from numpy.typing import ArrayLike
 from scipy.ndimage import median_filter
 from scipy.optimize import brentq, least_squares, nnls
 from scipy.signal import welch
@@ -165,12 +167,12 @@ class AllanResult:
 
 
 def allan_deviation(
-    y: object,
+    y: ArrayLike,
     rate: float,
     *,
     units: str | None = None,
     sensor: str | None = None,
-    taus: object | None = None,
+    taus: ArrayLike | None = None,
     per_decade: int = 10,
 ) -> AllanResult:
     """Overlapping Allan deviation of rate data with 68 % confidence intervals.
@@ -260,7 +262,8 @@ def _check_units(sensor: str | None, units: str | None) -> None:
     to_si_scale(sensor, units)
 
 
-def _averaging_factors(n: int, rate: float, taus: object | None, per_decade: int) -> np.ndarray:
+def _averaging_factors(n: int, rate: float, taus: ArrayLike | None,
+                       per_decade: int) -> np.ndarray:
     """Averaging factors ``m`` (tau = m/rate), sorted and unique, within 1 .. n // MIN_CLUSTERS."""
     m_max = n // MIN_CLUSTERS
     if taus is None:
@@ -319,10 +322,15 @@ def _basis(taus: np.ndarray, terms: tuple[str, ...], line_hz: float | None = Non
     ``(sin^2(pi f0 tau)/(pi f0 tau))^2``.
     """
     t = np.asarray(taus, dtype=float)
+
+    def sinusoid() -> np.ndarray:
+        if line_hz is None:
+            raise ValueError("the sinusoid term S needs its frequency line_hz")
+        return (np.sin(np.pi * line_hz * t) ** 2 / (np.pi * line_hz * t)) ** 2
+
     columns = {"Q": lambda: 3.0 / t**2, "N": lambda: 1.0 / t,
                "B": lambda: np.full_like(t, FLICKER_FLOOR**2), "K": lambda: t / 3.0,
-               "R": lambda: t**2 / 2.0,
-               "S": lambda: (np.sin(np.pi * line_hz * t) ** 2 / (np.pi * line_hz * t)) ** 2}
+               "R": lambda: t**2 / 2.0, "S": sinusoid}
     return np.column_stack([columns[k]() for k in terms])
 
 
@@ -379,8 +387,11 @@ class NoiseFit:
         return self.result.taus[self.start:]
 
     def misses(self) -> list[tuple[float, float]]:
-        """``(tau, fit/data)`` where the fit misses the measured deviation beyond its 95 %
-        interval and by more than :data:`MISS_FACTOR`, over the fitted taus."""
+        """List ``(tau, fit/data)`` where the fit misses the measured deviation.
+
+        A miss is beyond the deviation's 95 % interval and by more than
+        :data:`MISS_FACTOR`, over the fitted taus.
+        """
         res, out = self.result, []
         ratio = self.model_adev(res.taus) / res.adev
         for i in range(self.start, len(res.taus)):
@@ -392,9 +403,11 @@ class NoiseFit:
         return out
 
     def conservative(self, term: str) -> tuple[float, str]:
-        """The value of a term to hand to a filter or a configuration, and what it is: the
-        fitted coefficient where resolved (``"fitted"``), else its upper limit (``"upper
-        limit"``), never a silent 0."""
+        """Return the value of a term to hand to a filter or a configuration, and what it is.
+
+        That is the fitted coefficient where resolved (``"fitted"``), else its upper limit
+        (``"upper limit"``), never a silent 0.
+        """
         if self.resolved[term]:
             return self.coefficients[term], "fitted"
         return self.limits[term], "upper limit"
@@ -421,19 +434,19 @@ class NoiseFit:
             lo, hi = allantools.confidence_interval(c, 2.0 * (c**2 / se) ** 2, confidence)
         return float(lo), float(hi)
 
-    def term_adev(self, term: str, taus: object) -> np.ndarray:
+    def term_adev(self, term: str, taus: ArrayLike) -> np.ndarray:
         """Allan deviation of one fitted term at ``taus`` (seconds)."""
         column = _basis(np.asarray(taus), (term,), self.result.line_hz)[:, 0]
         return self.coefficients[term] * np.sqrt(column)
 
-    def model_adev(self, taus: object) -> np.ndarray:
+    def model_adev(self, taus: ArrayLike) -> np.ndarray:
         """Allan deviation of the fitted model (all terms) at ``taus``."""
         squared = np.array([self.coefficients[k] ** 2 for k in self.terms])
         basis = _basis(np.asarray(taus, dtype=float), self.terms, self.result.line_hz)
         return np.sqrt(basis @ squared)
 
     def dominant(self, tau: float) -> str:
-        """The resolved term with the largest Allan variance at ``tau`` seconds.
+        """Return the resolved term with the largest Allan variance at ``tau`` seconds.
 
         Among all fitted terms if none is resolved.
         """
@@ -447,8 +460,9 @@ class NoiseFit:
                 "R": f"{u}/s"}[term]
 
     def navigation(self, term: str, value: float | None = None) -> tuple[float, str] | None:
-        """A coefficient (or ``value`` of that term) in navigation units (deg/sqrt(h), deg/h,
-        ... or m/s/sqrt(h), mg, ...).
+        """Return a coefficient (or ``value`` of that term) in navigation units.
+
+        Those are deg/sqrt(h), deg/h, ... or m/s/sqrt(h), mg, ...
 
         None unless the record's sensor and units are known.
         """
@@ -462,13 +476,20 @@ class NoiseFit:
         value = self.coefficients[term] if value is None else value
         return value * base * factor, label
 
+    def _navigation_value(self, term: str, value: float) -> float:
+        """Return ``value`` of ``term`` in navigation units (NaN without sensor and units)."""
+        navigation = self.navigation(term, value)
+        return math.nan if navigation is None else navigation[0]
+
     def name(self, term: str) -> str:
         """Name of a term for the record's sensor (e.g. "angle random walk")."""
         return _NAMES.get(term) or _NAMES_BY_SENSOR[self.result.sensor][term]
 
     def summary(self) -> Summary:
-        """Coefficients in record and navigation units beside the classic read-offs, the
-        fit's setup and what it left out."""
+        """Summarise the fit: coefficients in record and navigation units, read-offs, setup.
+
+        Beside the classic read-offs, the fit's setup and what it left out.
+        """
         res = self.result
         info = [("Samples", f"{res.n_samples}"), ("Rate", f"{res.rate:g} Hz"),
                 ("Duration", f"{res.n_samples / res.rate:.6g} s"),
@@ -496,8 +517,8 @@ class NoiseFit:
             if nav is not None:
                 row.update({"Navigation": nav[0] if ok else np.nan,
                             "Navigation upper limit": (np.nan if ok else
-                                                       self.navigation(k, self.limits[k])[0]),
-                            "Navigation read-off": self.navigation(k, read)[0],
+                                                       self._navigation_value(k, self.limits[k])),
+                            "Navigation read-off": self._navigation_value(k, read),
                             "Navigation units": nav[1]})
             row["Resolved"] = "yes" if ok else "no"
             rows.append(row)
@@ -543,9 +564,11 @@ class NoiseFit:
         return notes
 
     def conventions(self) -> dict[str, str]:
-        """N, B and K fitted (an upper limit as ``"< value"``) beside the classic read-offs and
-        the datasheets' in-run bias stability, as text in navigation units (``"-"`` where a
-        read-off does not exist)."""
+        """Return N, B and K fitted beside the classic read-offs, as text in navigation units.
+
+        An upper limit reads ``"< value"``; beside them the datasheets' in-run bias stability
+        (``"-"`` where a read-off does not exist).
+        """
         read = self.readoff
         minimum = read.get("min_adev", math.nan)
         return {
@@ -694,8 +717,10 @@ def fit_noise(result: AllanResult, terms: tuple[str, ...] = TERMS, *,
 
 def _drop_one(result: AllanResult, kept: tuple[str, ...], start: int, squared: dict,
               se: dict, resid: np.ndarray, cov: np.ndarray) -> tuple[str, tuple] | None:
-    """The weakest unresolved term whose removal leaves the curve as well fitted, with the
-    refit without it; None if every unresolved term shapes the curve."""
+    """Find the weakest unresolved term whose removal leaves the curve as well fitted.
+
+    Return it with the refit without it; None if every unresolved term shapes the curve.
+    """
     loose = [k for k in kept if not squared[k] > 2.0 * se[k]]
     for term in sorted(loose, key=lambda k: squared[k] / se[k] if se[k] > 0 else -math.inf):
         trial = _fit_terms(result, tuple(k for k in kept if k != term), start)
@@ -746,9 +771,12 @@ def _weights(edf: np.ndarray) -> np.ndarray:
 
 
 def _unbiased(adev: np.ndarray, edf: np.ndarray) -> np.ndarray:
-    """``adev`` whose logarithm is unbiased: ``ln`` of a chi-square variance with ``edf``
-    degrees of freedom is low by ``ln(edf/2) - digamma(edf/2)`` on average (about 1/edf),
-    which would pull a log fit down by several per cent where few clusters remain."""
+    """Return ``adev`` scaled so that its logarithm is unbiased.
+
+    ``ln`` of a chi-square variance with ``edf`` degrees of freedom is low by
+    ``ln(edf/2) - digamma(edf/2)`` on average (about 1/edf), which would pull a log fit down
+    by several per cent where few clusters remain.
+    """
     return adev * np.exp(0.5 * (np.log(edf / 2.0) - digamma(edf / 2.0)))
 
 
@@ -775,8 +803,10 @@ def _log_fit(basis: np.ndarray, adev: np.ndarray, edf: np.ndarray) -> np.ndarray
 
 def _curve_fit(result: AllanResult, terms: tuple[str, ...],
                start: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The basis from ``start`` on, the squared coefficients fitted to the bias-corrected
-    ln ADEV there, and the residuals."""
+    """Return the basis from ``start`` on, the squared coefficients fitted there, residuals.
+
+    The coefficients are fitted to the bias-corrected ln ADEV.
+    """
     basis = _basis(result.taus[start:], terms, result.line_hz)
     adev = _unbiased(result.adev[start:], result.edf[start:])
     squared = _log_fit(basis, adev, result.edf[start:])
@@ -785,8 +815,10 @@ def _curve_fit(result: AllanResult, terms: tuple[str, ...],
 
 def _fit_terms(result: AllanResult, terms: tuple[str, ...],
                start: int) -> tuple[dict[str, tuple[float, float]], float, np.ndarray, np.ndarray]:
-    """``{term: (squared coefficient, its standard error)}`` of one fit, the misfit, the
-    residuals of ln ADEV and their covariance."""
+    """Return ``{term: (squared coefficient, its standard error)}`` of one fit, and more.
+
+    Also the misfit, the residuals of ln ADEV and their covariance.
+    """
     fitted, edf = slice(start, None), result.edf[start:]
     basis, squared, resid = _curve_fit(result, terms, start)
     variance = 0.5 / edf
@@ -802,8 +834,11 @@ def _fit_terms(result: AllanResult, terms: tuple[str, ...],
 
 
 def _chi2(resid: np.ndarray, cov: np.ndarray) -> float:
-    """Generalised chi-square ``r' C^-1 r``; a ridge of 1e-9 of the mean variance keeps the
-    nearly singular correlation of neighbouring taus invertible."""
+    """Return the generalised chi-square ``r' C^-1 r``.
+
+    A ridge of 1e-9 of the mean variance keeps the nearly singular correlation of
+    neighbouring taus invertible.
+    """
     ridge = 1e-9 * float(np.mean(np.diag(cov))) * np.eye(len(cov))
     return float(resid @ np.linalg.solve(cov + ridge, resid))
 
@@ -844,7 +879,7 @@ def _spectrum(f: np.ndarray, squared: dict[str, float], rate: float) -> np.ndarr
     s2 = np.sin(np.pi * f / rate) ** 2
     shapes = {"Q": 4.0 * s2 * rate, "N": np.ones_like(f), "B": 1.0 / (2.0 * np.pi * f),
               "K": 1.0 / (4.0 * rate**2 * s2), "R": np.zeros_like(f), "S": np.zeros_like(f)}
-    return sum(c * shapes[k] for k, c in squared.items())
+    return sum((c * shapes[k] for k, c in squared.items()), np.zeros_like(f))
 
 
 def _correlation(result: AllanResult, squared: dict[str, float]) -> np.ndarray:
@@ -927,8 +962,11 @@ def readoff(result: AllanResult, slope_tol: float = 0.25) -> dict[str, float]:
 
 
 def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
-    """Log-log Allan deviation with its 68 % band, each fitted term's line, their sum and the
-    classic read-offs; below, the fit over the data with the data's 68 % band."""
+    """Plot the log-log Allan deviation with its 68 % band and the fit over it.
+
+    Each fitted term's line, their sum and the classic read-offs; below, the fit over the
+    data with the data's 68 % band.
+    """
     fig = Figure(figsize=(7.5, 6.6), layout="constrained")
     ax, low = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
     ax.fill_between(result.taus, result.lower, result.upper, color="C0", alpha=0.25,
@@ -966,8 +1004,8 @@ def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
     return fig
 
 
-def _readoff_marks(ax, fit: NoiseFit) -> None:
-    """The classic read-offs as crosses: N at 1 s, K at 3 s, and the minimum (B)."""
+def _readoff_marks(ax: Axes, fit: NoiseFit) -> None:
+    """Mark the classic read-offs as crosses: N at 1 s, K at 3 s, and the minimum (B)."""
     marks = [("N", 1.0, fit.readoff.get("N", math.nan), "N read-off (-1/2 line at 1 s)"),
              ("K", 3.0, fit.readoff.get("K", math.nan), "K read-off (+1/2 line at 3 s)"),
              ("B", fit.readoff.get("min_tau_s", math.nan), fit.readoff.get("min_adev", math.nan),
