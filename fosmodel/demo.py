@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -29,7 +30,8 @@ from .study.report import paper_table, table_orders, write_study
 from .study.runner import run_study
 
 SEED = 2013
-RECORDS = {  # table number, scenario, its overrides, sensor, units
+RECORDS: dict[str, tuple[int, str, dict[str, Any], str, str]] = {
+    # table number, scenario, its overrides (make_scenario's keywords), sensor, units
     "accelerometer": (1, "paper_accel_y", {}, "accel", "m/s^2"),
     "gyroscope": (2, "paper_gyro_y", {"units": "deg/h"}, "gyro", "deg/h"),
 }
@@ -72,8 +74,8 @@ def run_bundled_record(out_dir: Path) -> pd.DataFrame:
     base = out_dir / "mpu6050"
     for column in MPU_STUDY:
         sensor, units = MPU_AXES[column]
-        result = run_study(rec.column(column), StudyConfig(rate=rec.rate, sensor=sensor,
-                                                           units=units))
+        result = run_study(rec.column(column), StudyConfig(rate=rec.require_rate(),
+                                                           sensor=sensor, units=units))
         title = f"MPU-6050 {column} ({units})"
         write_study(result, base / f"study_{column}", title)
         _print_table(title, result)
@@ -81,7 +83,7 @@ def run_bundled_record(out_dir: Path) -> pd.DataFrame:
     for axis, (sensor, units) in MPU_AXES.items():
         others = {c: rec.column(c) for c in rec.names if c != axis}
         loop = close_loop(rec.column(axis), others,
-                          LoopConfig(rate=rec.rate, sensor=sensor, units=units))
+                          LoopConfig(rate=rec.require_rate(), sensor=sensor, units=units))
         write_loop_report(loop, base / f"loop_{axis}", f"MPU-6050 {axis} ({units})")
         rows.append({"axis": axis, "units": units,
                      "effects kept": "; ".join(s.effect.describe() for s in loop.steps) or "none",

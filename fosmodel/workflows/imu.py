@@ -1,5 +1,6 @@
-"""The six-axis workflow: every axis of an IMU record through the Allan analysis, the
-model-order study and the residual loop, in one report.
+"""The six-axis workflow: every axis of an IMU record through each analysis, one report.
+
+Every axis goes through the Allan analysis, the model-order study and the residual loop.
 
 The Allan analysis fits all axes at once (:func:`fosmodel.noise.imu_noise.imu_noise`);
 the study (:func:`fosmodel.study.runner.run_study`) and the loop
@@ -70,14 +71,14 @@ class ImuConfig:
     n_jobs: int = 2
 
     def study_config(self, rate: float, axis: Axis) -> StudyConfig:
-        """The study of one axis."""
+        """Configure the study of one axis."""
         return StudyConfig(rate=rate, sensor=axis.sensor, units=axis.units, orders=self.orders,
                            degrees=self.degrees, methods=self.methods, protocols=self.protocols,
                            train_s=self.train_s, evaluate_s=self.evaluate_s,
                            horizon_s=self.horizon_s, n_starts=self.n_starts)
 
     def loop_config(self, rate: float, axis: Axis) -> LoopConfig:
-        """The residual loop of one axis."""
+        """Configure the residual loop of one axis."""
         return LoopConfig(rate=rate, sensor=axis.sensor, units=axis.units,
                           max_lag=self.loop_max_lag, train=self.loop_split[0],
                           evaluate=self.loop_split[1], horizon_s=self.horizon_s,
@@ -108,13 +109,17 @@ class ImuResult:
     allan_seconds: float
 
     def study_table(self) -> pd.DataFrame:
-        """Per axis, the best FOS and the best baseline of the study (chosen on the
-        evaluation segment) and their errors on the prediction segment."""
+        """Tabulate per axis the best FOS and the best baseline of the study.
+
+        Both are chosen on the evaluation segment; their errors are on the prediction segment.
+        """
         return pd.DataFrame([_study_row(a) for a in self.axes])
 
     def loop_table(self) -> pd.DataFrame:
-        """Per axis, the effects the loop kept and the prediction-segment errors before
-        and after them."""
+        """Tabulate per axis the effects the loop kept and the errors before and after them.
+
+        The errors are on the prediction segment.
+        """
         return pd.DataFrame([_loop_row(a) for a in self.axes])
 
     def timing_table(self) -> pd.DataFrame:
@@ -123,9 +128,11 @@ class ImuResult:
                                                         a.seconds.items()}} for a in self.axes])
 
     def filter_model(self) -> StateSpace:
-        """The axes' Allan error models (white noise, Gauss-Markov, random-walk bias) as one
-        block-diagonal shaping filter at the record's rate
-        (:func:`fosmodel.filter.allan_statespace.assemble_axes`)."""
+        """Return the axes' Allan error models as one block-diagonal shaping filter.
+
+        Each axis has white noise, a Gauss-Markov and a random-walk bias, at the record's rate
+        (:func:`fosmodel.filter.allan_statespace.assemble_axes`).
+        """
         return assemble_axes({a.axis.column: allan_state_space(a.fit) for a in self.noise.axes})
 
     def filter_dict(self) -> dict[str, Any]:
@@ -225,7 +232,7 @@ def _task(step: str, column: str, channels: Mapping[str, np.ndarray], axis: Axis
 
 def _run_tasks(channels: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: float,
                config: ImuConfig) -> Iterator[tuple[tuple[str, str], Any, float]]:
-    """The study and the loop of every axis, longest first, as they end."""
+    """Run the study and the loop of every axis, longest first; yield them as they end."""
     tasks = [(step, a.column, channels, a, rate, config) for step in ("loop", "study")
              for a in axes]
     if config.n_jobs == 1:
@@ -239,15 +246,15 @@ def _run_tasks(channels: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: f
     yield from run(delayed(_task)(*t) for t in tasks)
 
 
-def _brief(step: str, outcome: Any) -> str:
-    if step == "study":
+def _brief(step: str, outcome: StudyResult | LoopResult) -> str:
+    if isinstance(outcome, StudyResult):
         return f"{len(outcome.rows)} fits"
     kept = [s.effect.describe() for s in outcome.steps]
     return f"{len(kept)} effect(s) kept"
 
 
 def _best(rows: pd.DataFrame, fos: bool) -> pd.Series:
-    """The row with the lowest evaluation MSE among FOS's forms or among the baselines'."""
+    """Return the row with the lowest evaluation MSE among FOS's forms or the baselines'."""
     is_fos = rows["method"].str.startswith("fos")
     pick = rows[is_fos if fos else ~is_fos]
     return pick.loc[pick["evaluate_mse"].idxmin()]

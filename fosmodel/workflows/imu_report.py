@@ -1,5 +1,7 @@
-"""The six-axis workflow's report: one page with a table per step, the noise exports, the
-error models for a filter, and each axis's own reports beneath it.
+"""The six-axis workflow's report: one page, the noise exports, each axis's reports.
+
+One page with a table per step, the noise exports, the error models for a filter, and each
+axis's own reports beneath it.
 
 Layout of the report directory::
 
@@ -68,8 +70,11 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
 
 
 def _parts(result: ImuResult, out_dir: Path, title: str) -> list[tuple[Callable, tuple]]:
-    """The reports beneath the page, each a writer and its arguments: most of the time of a
-    report goes into drawing their figures, so they are drawn in parallel."""
+    """List the reports beneath the page, each a writer and its arguments.
+
+    Most of the time of a report goes into drawing their figures, so they are drawn in
+    parallel.
+    """
     parts: list[tuple[Callable, tuple]] = [
         (write_imu_noise, (result.noise, _mkdir(out_dir / "noise"), title))]
     for a in result.axes:
@@ -94,8 +99,11 @@ def _mkdir(path: Path) -> Path:
 
 
 def _write_model(result: ImuResult, a: AxisResult, folder: Path) -> tuple[Path, str]:
-    """The loop's final model of the axis, or its starting model when the effects it kept
-    made the prediction segment worse; returns the file and which model it holds."""
+    """Save the loop's final model of the axis, or its starting model if that did better.
+
+    The starting model is saved when the effects kept made the prediction segment worse;
+    return the file and which model it holds.
+    """
     worse = a.loop.worse()
     bound, which = ((a.loop.base_model, "the loop's starting model (its effects made the "
                      "prediction segment worse)") if worse and a.loop.steps
@@ -153,7 +161,7 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
 
 
 def _loop_warnings(result: ImuResult) -> list[str]:
-    """A plain sentence for every axis whose kept effects made unseen data worse."""
+    """Say in a plain sentence for every axis whose kept effects made unseen data worse."""
     out = []
     for a in result.axes:
         worse = a.loop.worse()
