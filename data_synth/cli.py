@@ -19,9 +19,11 @@ def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser
     """Add the ``synth`` arguments to ``parser`` and return it."""
     parser.add_argument("scenario", nargs="?", help="scenario name (see --list)")
     parser.add_argument("--list", action="store_true", help="list the scenarios and exit")
-    parser.add_argument("--duration", type=float, metavar="S", help="length in seconds")
-    parser.add_argument("--rate", type=float, metavar="HZ", help="sampling rate in Hz")
-    parser.add_argument("--seed", type=int, default=0, metavar="N", help="random seed (default 0)")
+    parser.add_argument("--duration", type=float, metavar="S",
+                        help="length in seconds (default: the scenario's, see --list)")
+    parser.add_argument("--rate", type=float, metavar="HZ",
+                        help="sampling rate in Hz (default: the scenario's, see --list)")
+    parser.add_argument("--seed", type=int, default=0, metavar="N", help="random seed")
     parser.add_argument(
         "--out", metavar="FILE.csv", help="output CSV; the truth goes to FILE.truth.json"
     )

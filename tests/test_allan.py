@@ -415,8 +415,10 @@ def test_cli_without_units_uses_record_units(tmp_path, capsys):
     "extra, seconds, message",
     [
         ([], 0.5, "record too short"),
-        (["--sensor", "gyro"], 600.0, "need the units of the record"),
-        (["--sensor", "gyro", "--units", "deg"], 600.0, "unknown gyro units"),
+        (["--sensor", "gyro"], 600.0, "column 'gyro_y': a gyro, but the name does not tell "
+                                      "its units; give them as gyro_y=UNITS (e.g. gyro_y=deg/s)"),
+        (["--sensor", "accel", "--units", "deg/s"], 600.0,
+         "column 'gyro_y': deg/s is a unit of a gyro, not of an accelerometer"),
     ],
 )
 def test_cli_bad_input_exit_2_one_line_no_output(tmp_path, capsys, extra, seconds, message):

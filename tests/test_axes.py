@@ -78,6 +78,19 @@ def test_which_wins_inline_then_per_column_then_every_then_per_sensor_then_the_n
                            ("gx_dps", "gyro", "rad/s", "gyro from the name, units given")]
 
 
+def test_units_the_file_declares_come_after_those_given():
+    declared = {"gx": "rad/s", "gy": "rad/s", "ax": "m/s^2"}
+    axes = resolve_axes(["gx", "gy", "ax", "az_g"], given=UnitsSpec.parse("gy=deg/s"),
+                        declared=declared)
+    assert _told(axes) == [("gx", "gyro", "rad/s", "units from the file"),
+                           ("gy", "gyro", "deg/s", "units given"),
+                           ("ax", "accel", "m/s^2", "units from the file"),
+                           ("az_g", "accel", "g", "from the name")]
+    with pytest.raises(InputError) as err:
+        resolve_axes(["gx"], declared=declared, sensor="accel")
+    assert str(err.value) == "column 'gx': rad/s is a unit of a gyro, not of an accelerometer"
+
+
 def test_a_sensor_given_for_every_column():
     axes = resolve_axes(["gyro", "rate_dps"], given=UnitsSpec.parse("deg/s"), sensor="gyro")
     assert _told(axes) == [("gyro", "gyro", "deg/s", "units given"),

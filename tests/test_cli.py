@@ -155,7 +155,7 @@ def test_study_writes_report_and_json(long_record, tmp_path, capsys):
     out, js = tmp_path / "study", tmp_path / "rows.json"
     code, stdout, err = _run(["study", long_record, "--column", "accel_y", "--sensor", "accel",
                               "--units", "m/s^2", "--orders", "1-3", "--degrees", "1,2",
-                              "--split", "300,200", "--starts", "5", "--out", out,
+                              "--split", "300s,200s", "--starts", "5", "--out", out,
                               "--json", js], capsys)
     assert code == 0, err
     assert "Yule-Walker" in stdout and "FOS CP=2" in stdout and "written to" in stdout
@@ -170,7 +170,7 @@ def test_study_writes_report_and_json(long_record, tmp_path, capsys):
     assert "## About the local level (fair protocol)" in (out / "report.md").read_text()
     code, stdout, err = _run(["study", long_record, "--column", "accel_y", "--sensor", "accel",
                               "--units", "m/s^2", "--orders", "1", "--degrees", "1",
-                              "--split", "300,200", "--starts", "5", "--no-levels",
+                              "--split", "300s,200s", "--starts", "5", "--no-levels",
                               "--out", tmp_path / "plain", "--json", js], capsys)
     assert code == 0, err
     assert not any(r["method"].endswith("+level") for r in json.loads(js.read_text())["rows"])
@@ -178,11 +178,12 @@ def test_study_writes_report_and_json(long_record, tmp_path, capsys):
 
 @pytest.mark.parametrize(
     "extra, message",
-    [(["--split", "600,300"], "leaves 0 samples to predict"),
-     (["--split", "600,250"], "leaves 500 samples to predict, 600 are needed (a 30 s "
+    [(["--split", "600s,300s"], "leaves 0 samples to predict"),
+     (["--split", "10min,250s"], "leaves 500 samples to predict, 600 are needed (a 30 s "
                               "outage horizon and two 30 s bias windows)"),
      (["--methods", "fos,arima"], "unknown method 'arima'"),
-     (["--units", "deg/s"], "deg/s"),
+     (["--units", "deg/s"], "fosmodel: error: column 'accel_y': deg/s is a unit of a gyro, "
+                            "not of an accelerometer\n"),
      (["--column", "accel_x"], "no column 'accel_x' (did you mean 'accel_y'?)")],
 )
 def test_study_bad_input_exit_2(long_record, tmp_path, capsys, extra, message):
@@ -253,8 +254,10 @@ def test_fit_offers_levels(long_record, tmp_path, capsys):
 
 @pytest.mark.parametrize(
     "extra, message",
-    [(["--units", "deg/s"], "give both the sensor"),
-     (["--split", "0.7,0.4"], "adding up to less than 1"),
+    [(["--sensor", "gyro"], "fosmodel: error: column 'gyro_y': a gyro, but the name does not "
+                             "tell its units; give them as gyro_y=UNITS (e.g. gyro_y=deg/s)\n"),
+     (["--split", "25s,5s"], "fosmodel: error: the split 25s,5s leaves nothing of the record "
+                             "(3000 samples, 30 s at 100 Hz) to predict\n"),
      (["--aux", "temp"], "no column 'temp' (did you mean 'temp_c'?)"),
      (["--max-lag", "0"], "max_lag must be an integer >= 1")],
 )
@@ -313,9 +316,13 @@ def test_fit_and_predict_on_segments_and_fill(tmp_path, capsys):
                          "--out", tmp_path / "p.csv"], capsys)
     assert code == 0, err
     assert pd.read_csv(tmp_path / "p.csv")["prediction"].isna().sum() == 2 * 10
-    code, _, err = _run(["study", path, "--column", "gyro", "--sensor", "gyro", "--units",
-                         "deg/s", "--segments", "--out", tmp_path / "s"], capsys)
-    assert code == 2 and "needs a contiguous record" in err and not (tmp_path / "s").exists()
+    with pytest.raises(SystemExit) as exc:  # a usage error: the study is not offered segments
+        _run(["study", path, "--column", "gyro", "--units", "deg/s", "--segments", "--out",
+              tmp_path / "s"], capsys)
+    assert exc.value.code == 2 and not (tmp_path / "s").exists()
+    assert capsys.readouterr().err == (
+        "fosmodel: error: argument --segments: the model-order study needs a contiguous record; "
+        "pass --fill to interpolate across the gaps (fosmodel study --help shows the usage)\n")
     code, _, err = _run(["fit", path, "--column", "gyro", "--fill", "--out",
                          tmp_path / "m2.json"], capsys)
     assert code == 0 and "filled by linear interpolation (1000 samples added" in err
@@ -334,7 +341,7 @@ def _imu_files(tmp_path, columns=(("gx", "gy"), ("gx", "gy"))):
 
 def _multi_study(paths, out, *extra):
     return ["study", *paths, "--columns", "gx,gy", "--sensor", "gyro", "--units", "deg/s",
-            "--orders", "1-2", "--degrees", "1", "--protocol", "fair", "--split", "300,200",
+            "--orders", "1-2", "--degrees", "1", "--protocol", "fair", "--split", "300s,200s",
             "--starts", "5", "--out", out, *extra]
 
 
@@ -428,3 +435,214 @@ def test_dask_options_without_the_distributed_extra_say_how_to_get_it(record, tm
     assert code == 2 and not out.exists()
     assert err.strip() == (f"fosmodel: error: {flag[0]}: running fits on Dask needs the "
                            "'distributed' extra: pip install 'fosmodel[distributed]'")
+
+
+# --- one grammar: lengths with units, comma lists, units per column, -v anywhere, defaults ------
+
+
+def _subparsers():
+    import argparse
+
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return sub.choices
+
+
+def test_every_option_of_every_command_has_help_ending_with_its_default():
+    import argparse
+
+    for name, command in _subparsers().items():
+        text = "".join(command.format_help().split())  # wrapped lines, "single-" "threaded"
+        formatter = command._get_formatter()
+        for action in command._actions:
+            if not action.option_strings or action.help == argparse.SUPPRESS:
+                continue
+            shown = formatter._expand_help(action)
+            assert action.help, (name, action.option_strings)
+            has_default = (action.nargs != 0 and action.default not in (None, argparse.SUPPRESS)
+                           and action.default != [])
+            if has_default:
+                assert shown.endswith(f"(default: {action.default})"), (name, shown)
+            assert "".join(shown.split()) in text, (name, shown)
+        assert "(default:None)" not in text and "(default:False)" not in text, name
+        assert "(default:[])" not in text and "==SUPPRESS==" not in text, name
+    study = " ".join(_subparsers()["study"].format_help().split())
+    for default in ("(default: 180s,180s)", "(default: 1-10)", "(default: 1,2)",
+                    "(default: fos,yw,cov,burg,gm)", "(default: 30)", "(default: keep)"):
+        assert default in study
+    assert "(default: 50%,20%)" in " ".join(_subparsers()["close-loop"].format_help().split())
+
+
+@pytest.mark.parametrize("argv", [["-v", "fit", "r.csv", "--column", "g", "--out", "m.json"],
+                                  ["fit", "r.csv", "-v", "--column", "g", "--out", "m.json"],
+                                  ["study", "r.csv", "--column", "g", "--out", "o", "--verbose"]])
+def test_verbose_before_or_after_the_command(argv):
+    assert cli.build_parser().parse_args(argv).verbose is True
+    quiet = [a for a in argv if a not in ("-v", "--verbose")]
+    assert cli.build_parser().parse_args(quiet).verbose is False
+
+
+def test_verbose_after_the_command_shows_the_traceback_of_a_bug(record, tmp_path, capsys,
+                                                                monkeypatch):
+    def broken(*args, **kwargs):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr("fosmodel.cli.commands.read_model", broken)
+    argv = ["predict", record, "--model", tmp_path / "m.json", "--out", tmp_path / "p.csv"]
+    code, _, err = _run([*argv, "-v"], capsys)
+    assert code == 1 and "Traceback" in err and "RuntimeError: a bug" in err
+    code, _, err = _run(argv, capsys)
+    assert code == 1 and "Traceback" not in err
+
+
+def test_multi_valued_options_take_comma_lists():
+    parser = cli.build_parser()
+    args = parser.parse_args(["fit", "r.csv", "--column", "g", "--exog", "a:1,b:2", "--exog",
+                              "c:0", "--scale", "a=1/2,b=2", "--scale", "c=3", "--out", "m"])
+    assert args.exog == [("a", 1), ("b", 2), ("c", 0)]
+    assert args.scale == ["a=1/2", "b=2", "c=3"]
+    # --aux no longer swallows the record named after it
+    args = parser.parse_args(["close-loop", "--aux", "temp_c,hum", "r.csv", "--column", "g",
+                              "--out", "o"])
+    assert args.aux == ["temp_c", "hum"] and args.file == "r.csv"
+    args = parser.parse_args(["study", "r.csv", "--columns", "gx,gy", "--orders", "1-3,8",
+                              "--degrees", "1", "--methods", "fos,burg", "--out", "o"])
+    assert (args.columns, args.orders, args.methods) == (["gx", "gy"], [1, 2, 3, 8],
+                                                         ["fos", "burg"])
+
+
+def test_a_scale_list_reads_as_the_repeated_option(tmp_path, capsys, spiky_csv):
+    p, _, _ = spiky_csv(with_time=False)
+    notes = []
+    for scale in (["--scale", "a=1/2,b=0.5"], ["--scale", "a=1/2", "--scale", "b=0.5"]):
+        code, _, err = _run(["fit", p, "--column", "a", *scale, "--out", tmp_path / "m.json"],
+                            capsys)
+        assert code == 0, err
+        notes.append([line for line in err.splitlines() if "scaled" in line])
+    assert notes[0] == notes[1] == ["fosmodel: note: scaled a by 0.5, b by 0.5"]
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["study", "r.csv", "--column", "gx", "--split", "180,180", "--out", "o"],
+     "argument --split: expected TRAIN,EVALUATE with units: durations like 180s,180s (s, min or "
+     "h) or percents of the record like 50%,20%, got '180,180' (fosmodel study --help shows the "
+     "usage)"),
+    (["close-loop", "r.csv", "--column", "gx", "--split", "0.5,0.2", "--out", "o"],
+     "argument --split: expected TRAIN,EVALUATE with units: durations like 180s,180s (s, min or "
+     "h) or percents of the record like 50%,20%, got '0.5,0.2' (fosmodel close-loop --help shows "
+     "the usage)"),
+    (["study", "r.csv", "--column", "gx", "--units", "deg", "--out", "o"],
+     "argument --units: unknown units 'deg' (did you mean 'deg/s'?); valid units: m/s^2, g, mg "
+     "(accel); rad/s, deg/s, deg/h (gyro) (fosmodel study --help shows the usage)"),
+    (["allan", "r.csv", "--columns", "gx,ax", "--units", "gx=deg/s,=g", "--out", "o"],
+     "argument --units: expected UNITS or COLUMN=UNITS,... (e.g. deg/s or gx=deg/s,ax=g), got "
+     "'gx=deg/s,=g' (fosmodel allan --help shows the usage)"),
+    (["allan", "r.csv", "--column", "gx", "--segments", "--out", "o"],
+     "argument --segments: the Allan deviation needs a contiguous record; pass --fill to "
+     "interpolate across the gaps (fosmodel allan --help shows the usage)"),
+    (["close-loop", "r.csv", "--column", "gx", "--segments", "--out", "o"],
+     "argument --segments: the residual loop needs a contiguous record; pass --fill to "
+     "interpolate across the gaps (fosmodel close-loop --help shows the usage)"),
+])
+def test_usage_errors_of_the_grammar(argv, message, capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(argv)
+    assert exc.value.code == 2
+    assert capsys.readouterr().err == f"fosmodel: error: {message}\n"
+
+
+def test_segments_is_offered_only_where_a_record_may_have_gaps():
+    for name, command in _subparsers().items():
+        offered = "--segments" in command.format_help()
+        assert offered == (name in ("fit", "predict")), name
+
+
+def _mixed_imu(tmp_path):
+    """900 s at 10 Hz of a gyro in deg/s (s1) and an accelerometer in g (s2): names that tell
+    neither sensor nor units."""
+    rng = np.random.default_rng(5)
+    ar = [lfilter([1.0], [1.0, -0.9, 0.4], rng.standard_normal(9000)) for _ in range(2)]
+    path = tmp_path / "mixed.csv"
+    pd.DataFrame({"time": np.arange(9000) / 10.0, "s1": 0.05 * ar[0],
+                  "s2": 2e-4 * ar[1]}).to_csv(path, index=False)
+    return path
+
+
+def test_a_study_of_gyro_and_accelerometer_columns_scores_each_in_its_own_units(tmp_path,
+                                                                                capsys):
+    from fosmodel.noise.metrics import equivalent_position_error
+
+    path, js = _mixed_imu(tmp_path), tmp_path / "rows.json"
+    code, stdout, err = _run(["study", path, "--columns", "s1,s2", "--units", "s1=deg/s,s2=g",
+                              "--orders", "1-2", "--degrees", "1", "--methods", "fos,burg",
+                              "--protocol", "fair", "--no-levels", "--split", "5min,50%",
+                              "--starts", "5", "--out", tmp_path / "out", "--json", js], capsys)
+    assert code == 0, err
+    records = json.loads(js.read_text())["records"]
+    assert [(r["column"], r["config"]["sensor"], r["config"]["units"]) for r in records] == [
+        ("s1", "gyro", "deg/s"), ("s2", "accel", "g")]
+    for r in records:
+        assert (r["config"]["train_s"], r["config"]["evaluate_s"]) == (300.0, 450.0)
+        assert r["split_samples"] == {"train": [0, 3000], "evaluate": [3000, 7500],
+                                      "predict": [7500, 9000]}
+        for row in r["rows"]:
+            assert row["position_error_m"] == pytest.approx(equivalent_position_error(
+                row["mse"], r["config"]["sensor"], r["config"]["units"]), rel=1e-12)
+    assert "MSE (deg/s)^2" in stdout and "MSE (g)^2" in stdout
+    for name, units in (("mixed_s1", "gyro, units deg/s"), ("mixed_s2", "accel, units g")):
+        assert units in (tmp_path / "out" / name / "report.md").read_text()
+
+
+def test_a_single_units_and_sensor_still_apply_to_every_column(tmp_path, capsys):
+    path, js = _mixed_imu(tmp_path), tmp_path / "rows.json"
+    code, _, err = _run(["study", path, "--columns", "s1,s2", "--sensor", "gyro", "--units",
+                         "deg/h", "--orders", "1", "--degrees", "1", "--methods", "burg",
+                         "--protocol", "fair", "--no-levels", "--split", "300s,300s",
+                         "--starts", "5", "--out", tmp_path / "out", "--json", js], capsys)
+    assert code == 0, err
+    assert [(r["config"]["sensor"], r["config"]["units"])
+            for r in json.loads(js.read_text())["records"]] == [("gyro", "deg/h")] * 2
+
+
+def test_study_split_in_percent_is_the_split_in_seconds(long_record, tmp_path, capsys):
+    rows = []
+    for split in ("50%,25%", "450s,225s", "7.5min,3.75min"):
+        js = tmp_path / f"{split.replace('%', 'pc')}.json"
+        code, _, err = _run(["study", long_record, "--column", "accel_y", "--units", "m/s^2",
+                             "--orders", "1-2", "--degrees", "1", "--methods", "burg,fos",
+                             "--protocol", "fair", "--no-levels", "--split", split, "--starts",
+                             "5", "--out", tmp_path / split.replace("%", "pc"), "--json", js],
+                            capsys)
+        assert code == 0, err
+        data = json.loads(js.read_text())
+        rows.append([(r["method"], r["order"], r["mse"]) for r in data["rows"]])
+        assert data["split_samples"]["evaluate"] == [4500, 6750]
+    assert rows[0] == rows[1] == rows[2]
+
+
+def test_close_loop_split_in_seconds_resolves_to_fractions_of_the_record(record, tmp_path,
+                                                                         capsys):
+    code, _, err = _run(["close-loop", record, "--column", "gyro_y", "--split", "20s,5s",
+                         "--out", tmp_path / "o"], capsys)
+    assert code == 2 and not (tmp_path / "o").exists()
+    assert err.startswith("fosmodel: error: the record (3000 samples, 30 s at 100 Hz) is too "
+                          "short for the split 0.666667 / 0.166667: ")
+
+
+def test_allan_takes_units_per_column_beside_the_names(tmp_path, capsys):
+    path = _mixed_imu(tmp_path)
+    out, js = tmp_path / "noise", tmp_path / "noise.json"
+    code, _, err = _run(["allan", path, "--columns", "s1,s2", "--units", "s1=deg/s,s2=g",
+                         "--out", out, "--json", js], capsys)
+    assert code == 0, err
+    assert "fosmodel: s1: gyro in deg/s (units given)" in err
+    assert "fosmodel: s2: accel in g (units given)" in err
+    axes = {a["column"]: a for a in json.loads(js.read_text())["axes"]}
+    for column, si in (("s1", np.pi / 180), ("s2", 9.80665)):
+        density = axes[column]["noise_density"]
+        assert density["value"] == pytest.approx(density["record_units_value"] * si, rel=1e-12)
+    # one column: --units alone gives the navigation units (its sensor from the units)
+    code, stdout, err = _run(["allan", path, "--column", "s2", "--units", "g", "--out",
+                              tmp_path / "one"], capsys)
+    assert code == 0, err
+    assert "Sensor:" in stdout and "accel" in stdout

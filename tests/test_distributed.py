@@ -149,7 +149,7 @@ def two_files(tmp_path_factory):
 
 def _study(files, out, *extra):
     args = ["study", *files, "--columns", "ax", "--sensor", "accel", "--units", "m/s^2",
-            "--orders", "1-2", "--degrees", "1", "--protocol", "fair", "--split", "300,200",
+            "--orders", "1-2", "--degrees", "1", "--protocol", "fair", "--split", "300s,200s",
             "--starts", "5", "--out", out, *extra]
     return cli.main([str(a) for a in args])
 

@@ -101,13 +101,19 @@ def _report_over_input(tmp):
     path = _write(tmp, _record(12000), "study.csv")
     return ["study", path, "--column", "gx", "--sensor", "gyro", "--units", "deg/s",
             "--orders", "1", "--degrees", "1", "--methods", "burg", "--protocol", "fair",
-            "--split", "30,20", "--no-levels", "--out", str(tmp)]
+            "--split", "30s,20s", "--no-levels", "--out", str(tmp)]
 
 
 def _report(command, tmp, path, *extra):
     """``study``, ``close-loop`` or ``allan`` on ``path``, with a report directory."""
     study = ["--sensor", "gyro", "--units", "deg/s"] if command == "study" else []
     return [command, path, "--column", "gx", *study, *extra, "--out", str(tmp / "report")]
+
+
+def _units(tmp, *units):
+    """``study`` of column gx with the ``units`` options."""
+    return ["study", _write(tmp, _record()), "--column", "gx", *units, "--out",
+            str(tmp / "report")]
 
 
 BUILDERS = {
@@ -157,8 +163,15 @@ BUILDERS = {
         lambda tmp: _predict(tmp, _record(2), _model(tmp)),
     "record too short for the split": lambda tmp: _report("close-loop", tmp,
                                                           _write(tmp, _record(3000))),
-    "gaps kept with `--segments` where a contiguous record is needed":
+    "`--segments` with `study`, `close-loop` or `allan`":
         lambda tmp: _report("allan", tmp, _gappy(tmp), "--segments"),
+    "`--split` without units": lambda tmp: _report("study", tmp, _write(tmp, _record()),
+                                                   "--split", "180,180"),
+    "unknown units": lambda tmp: _units(tmp, "--units", "deg"),
+    "units of another sensor than `--sensor`":
+        lambda tmp: _units(tmp, "--units", "deg/s", "--sensor", "accel"),
+    "a column whose units are neither given nor in its name": lambda tmp: _units(tmp),
+    "units given for a column not studied": lambda tmp: _units(tmp, "--units", "gy=deg/s"),
     "model file missing": lambda tmp: _predict(tmp, _record(), str(tmp / "none.json")),
     "model file not JSON": lambda tmp: _predict(tmp, _record(), _write(tmp, "{", "m.json")),
     "model file damaged inside":

@@ -49,7 +49,7 @@ def _commands(folder, out):
     loop = ["close-loop", rec, "--column", "gx", "--out", str(folder / "report")]
     study = ["study", rec, "--column", "gx", "--sensor", "gyro", "--units", "deg/s",
              "--orders", "1", "--degrees", "1", "--methods", "burg", "--protocol", "fair",
-             "--split", "30,20", "--no-levels", "--out", str(folder / "report")]
+             "--split", "30s,20s", "--no-levels", "--out", str(folder / "report")]
     allan = ["allan", rec, "--column", "gx", "--out", str(folder / "report")]
     return [
         ["fit", rec, "--column", "gx", "--out", out],
@@ -98,7 +98,7 @@ def test_a_report_that_would_replace_an_input_changes_nothing(folder, capsys):
     before = _snapshot(folder)
     argv = ["study", str(study), "--column", "gx", "--sensor", "gyro", "--units", "deg/s",
             "--orders", "1", "--degrees", "1", "--methods", "burg", "--protocol", "fair",
-            "--split", "30,20", "--no-levels", "--out", str(study.parent)]
+            "--split", "30s,20s", "--no-levels", "--out", str(study.parent)]
     assert cli.main(argv) == 2
     assert "would replace" in capsys.readouterr().err
     assert _snapshot(folder) == before
@@ -241,7 +241,7 @@ def _interrupted_commands(folder):
         "predict": ["predict", rec, "--model", str(folder / "model.json"), "--out", out],
         "study": ["study", rec, "--column", "gx", "--sensor", "gyro", "--units", "deg/s",
                   "--orders", "1", "--degrees", "1", "--methods", "burg", "--protocol", "fair",
-                  "--split", "30,20", "--no-levels", *report, "--json", str(folder / "o.json")],
+                  "--split", "30s,20s", "--no-levels", *report, "--json", str(folder / "o.json")],
         "close-loop": ["close-loop", rec, "--column", "gx", *report, "--json",
                        str(folder / "o.json"), "--model", str(folder / "m.json")],
         "allan": ["allan", rec, "--column", "gx", *report, "--json", str(folder / "o.json")],

@@ -14,7 +14,8 @@ import yaml
 
 from fosmodel import cli
 from fosmodel.core.exceptions import InputError
-from fosmodel.noise.imu_noise import Axis, imu_noise, infer_axis, resolve_axes
+from fosmodel.noise.axes import Axis, infer_axis, resolve_axes
+from fosmodel.noise.imu_noise import imu_noise
 
 RATE = 100.0
 N_SAMPLES = 200_000
@@ -68,9 +69,9 @@ def test_axes_given_inferred_and_refused():
     assert axes[2].told == "given" and axes[1].told == "gyro from the name, units given"
     cases = {
         ("gx",): "column 'gx': a gyro by its name, but the name does not tell its units; give "
-                 "--gyro-units or gx:gyro:UNITS",
-        ("temp",): "column 'temp': its name does not tell the sensor; give it as "
-                   "temp:gyro:UNITS or temp:accel:UNITS",
+                 "them as gx=UNITS (e.g. gx=deg/s)",
+        ("temp",): "column 'temp': its name does not tell the sensor; give its units, which do, "
+                   "as temp=UNITS (e.g. temp=deg/s for a gyro, temp=m/s^2 for an accelerometer)",
         ("ax:accel",): "expected COLUMN or COLUMN:SENSOR:UNITS (e.g. gx:gyro:deg/s), got "
                        "'ax:accel'",
         ("gx_dps", "gx_dps"): "column 'gx_dps' is named twice in --columns",
@@ -192,15 +193,17 @@ def test_the_command_writes_one_report_for_all_axes(six_axes, noise, tmp_path, c
 
 
 @pytest.mark.parametrize(("extra", "message"), [
-    (["--columns", "gx_dps", "--sensor", "gyro"],
-     "fosmodel: error: --sensor and --units go with --column; with --columns give "
-     "COLUMN:SENSOR:UNITS or --gyro-units/--accel-units"),
-    (["--column", "gx_dps", "--gyro-units", "deg/s"],
-     "fosmodel: error: --gyro-units and --accel-units go with --columns; give --sensor and "
-     "--units with --column"),
-    (["--columns", "gx_dps,temp"],
-     "fosmodel: error: column 'temp': its name does not tell the sensor; give it as "
-     "temp:gyro:UNITS or temp:accel:UNITS"),
+    (["--columns", "gx_dps,ax_g", "--sensor", "gyro"],
+     "fosmodel: error: column 'ax_g': its name tells an accelerometer, not a gyro; if it is one, "
+     "give its units as ax_g=UNITS"),
+    (["--columns", "gx_dps,ax_g", "--units", "ax_g=deg/s", "--sensor", "accel"],
+     "fosmodel: error: column 'gx_dps': its name tells a gyro, not an accelerometer; if it is "
+     "one, give its units as gx_dps=UNITS"),
+    (["--columns", "gx_dps,ax_g", "--units", "gx_dps=deg/s,ax=g"],
+     "fosmodel: error: units are given for column 'ax', which is not among the columns: "
+     "gx_dps, ax_g"),
+    (["--columns", "ax_g", "--units", "deg/s", "--sensor", "accel"],
+     "fosmodel: error: column 'ax_g': deg/s is a unit of a gyro, not of an accelerometer"),
 ])
 def test_the_command_refuses_mixed_or_untold_axes(six_axes, tmp_path, capsys, extra, message):
     out = tmp_path / "report"

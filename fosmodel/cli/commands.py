@@ -23,25 +23,16 @@ from ..core.exceptions import InputError
 from ..core.levels import levels_for
 from ..io.loader import Record, load_record, parse_scales
 from ..io.model_file import read_model, write_model
-from ..io.output import atomic_write, refuse_overwrite, report_directory, write_text
+from ..io.output import (
+    atomic_write,
+    refuse_overwrite,
+    report_directory,
+    writable_directory,
+    writable_file,
+    write_text,
+)
 from ..models.model import FOSModel
-
-
-def _out_path(path: str) -> Path:
-    out = Path(path)
-    if not out.parent.is_dir():
-        raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
-    if out.is_dir():
-        raise InputError(f"cannot write {out}: it is a directory")
-    return out
-
-
-def _out_dir(path: str) -> Path:
-    """The output directory of a report: created on success, so it must not be a file."""
-    out = Path(path)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"cannot write a report into {out}: it is a file, not a directory")
-    return out
+from ..noise.axes import SENSORS, Axis, resolve_axes
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
@@ -59,8 +50,19 @@ def _load(args: argparse.Namespace, path: str | None = None,
     return rec
 
 
+def _axes(args: argparse.Namespace, columns: list[str], rec: Record,
+          optional: bool = False) -> list[Axis]:
+    """Each column's sensor and units from --units, the file, --sensor, --gyro-units/--accel-units
+    or its name (:func:`~fosmodel.noise.axes.resolve_axes`); none if ``optional`` and none is."""
+    per_sensor = {s: units for s in SENSORS if (units := vars(args).get(f"{s}_units"))}
+    if optional and not (args.sensor or args.units or per_sensor or set(columns) & set(rec.units)):
+        return []
+    return resolve_axes(columns, per_sensor, given=args.units, declared=rec.units,
+                        sensor=args.sensor)
+
+
 def fit(args: argparse.Namespace) -> int:
-    out = _out_path(args.out)
+    out = writable_file(args.out)
     refuse_overwrite({"--out": out}, {"the record": args.file})
     exog_lags = dict(args.exog or [])
     if args.column in exog_lags:
@@ -92,7 +94,7 @@ def fit(args: argparse.Namespace) -> int:
 
 
 def predict(args: argparse.Namespace) -> int:
-    out = _out_path(args.out)
+    out = writable_file(args.out)
     refuse_overwrite({"--out": out}, {"the record": args.file, "the model": args.model})
     model = read_model(args.model)
     column = args.column or model.meta_.get("column")
@@ -142,24 +144,24 @@ def study(args: argparse.Namespace) -> int:
     from ..study.runner import dask_client, run_studies
 
     _check_dask(args)
-    json_path = _out_path(args.json) if args.json else None
-    out = _out_dir(args.out)
+    json_path = writable_file(args.json) if args.json else None
+    out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {f"the record {i + 1}": f
                                              for i, f in enumerate(args.files)})
-    if not args.columns:
-        raise InputError("no column given; pass --columns COL[,COL...]")
-    check_report_names(args.files, args.columns)
+    columns = [spec.partition(":")[0] for spec in args.columns]  # COL or COL:SENSOR:UNITS
+    check_report_names(args.files, columns)
+    settings = dict(orders=args.orders, degrees=args.degrees, methods=args.methods,
+                    protocols=["paper", "fair"] if args.protocol == "both" else [args.protocol],
+                    horizon_s=args.horizon, n_starts=args.starts, paper_denoise=args.denoise,
+                    fos_stop=args.stop, levels=not args.no_levels)
     studies = []
     for path in args.files:
-        rec = _load(args, path, columns=args.columns)
-        config = StudyConfig(
-            rate=rec.require_rate(), sensor=args.sensor, units=args.units, orders=args.orders,
-            degrees=args.degrees, methods=args.methods,
-            protocols=["paper", "fair"] if args.protocol == "both" else [args.protocol],
-            train_s=args.split[0], evaluate_s=args.split[1], horizon_s=args.horizon,
-            n_starts=args.starts, paper_denoise=args.denoise, fos_stop=args.stop,
-            levels=not args.no_levels)
-        studies += plan_columns(rec, path, args.columns, config)
+        rec = _load(args, path, columns=columns)
+        axes = _axes(args, args.columns, rec)
+        train_s, evaluate_s = args.split.seconds(rec.n_samples, rec.require_rate())
+        studies += plan_columns(rec, path, {a.column: StudyConfig(
+            rate=rec.require_rate(), sensor=a.sensor, units=a.units, train_s=train_s,
+            evaluate_s=evaluate_s, **settings) for a in axes})
     with dask_client(args.scheduler, args.workers, args.connect_timeout) as client:
         results = run_studies([s.plan for s in studies], client=client,
                               progress=sys.stderr.isatty())
@@ -183,20 +185,22 @@ def close_loop(args: argparse.Namespace) -> int:
     from ..loop.closeloop import close_loop as run_loop
     from ..loop.loop_report import CONSOLE_WIDTH, console_summary, write_loop_report
 
-    json_path = _out_path(args.json) if args.json else None
-    model_path = _out_path(args.model) if args.model else None
-    out = _out_dir(args.out)
+    json_path = writable_file(args.json) if args.json else None
+    model_path = writable_file(args.model) if args.model else None
+    out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path, "--model": model_path}, {"the record": args.file})
     if args.aux is not None and args.column in args.aux:
         raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
                          "residual (its lag 0 is the value predicted)")
     rec = _load(args, columns=None if args.aux is None else [args.column, *args.aux])
-    rec.require_contiguous("the residual loop")
+    axis = _axes(args, [args.column], rec, optional=True)
     y = rec.column(args.column)
     aux = args.aux if args.aux is not None else [c for c in rec.names if c != args.column]
     channels = {name: rec.column(name) for name in aux}
-    config = LoopConfig(rate=rec.require_rate(), sensor=args.sensor, units=args.units,
-                        max_lag=args.max_lag, train=args.split[0], evaluate=args.split[1])
+    train, evaluate = args.split.fractions(rec.n_samples, rec.require_rate())
+    config = LoopConfig(rate=rec.require_rate(), sensor=axis[0].sensor if axis else None,
+                        units=axis[0].units if axis else None,
+                        max_lag=args.max_lag, train=train, evaluate=evaluate)
     result = run_loop(y, channels, config, progress=lambda line: print(
         textwrap.fill(f"fosmodel: {line}", CONSOLE_WIDTH, subsequent_indent="fosmodel:     "),
         file=sys.stderr, flush=True))
@@ -217,20 +221,18 @@ def close_loop(args: argparse.Namespace) -> int:
 
 
 def allan(args: argparse.Namespace) -> int:
+    json_path = writable_file(args.json) if args.json else None
+    out = writable_directory(args.out)
+    refuse_overwrite({"--json": json_path}, {"the record": args.file})
     if args.columns:
-        return _allan_axes(args)
-    if args.gyro_units or args.accel_units:
-        raise InputError("--gyro-units and --accel-units go with --columns; give --sensor and "
-                         "--units with --column")
+        return _allan_axes(args, out, json_path)
     from ..noise.allan import allan_deviation, fit_noise, write_allan
 
-    json_path = _out_path(args.json) if args.json else None
-    out = _out_dir(args.out)
-    refuse_overwrite({"--json": json_path}, {"the record": args.file})
     rec = _load(args, columns=[args.column])
-    rec.require_contiguous("the Allan deviation")
-    y = rec.column(args.column)
-    result = allan_deviation(y, rec.require_rate(), units=args.units, sensor=args.sensor)
+    axis = _axes(args, [args.column], rec, optional=True)
+    result = allan_deviation(rec.column(args.column), rec.require_rate(),
+                             units=axis[0].units if axis else None,
+                             sensor=axis[0].sensor if axis else None)
     fit = fit_noise(result, min_tau=args.min_tau)
     with report_directory(out, [args.file]) as tmp:
         write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}")
@@ -250,19 +252,11 @@ def allan(args: argparse.Namespace) -> int:
     return 0
 
 
-def _allan_axes(args: argparse.Namespace) -> int:
-    from ..noise.imu_noise import imu_noise, resolve_axes, write_imu_noise
+def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> int:
+    from ..noise.imu_noise import imu_noise, write_imu_noise
 
-    if args.sensor or args.units:
-        raise InputError("--sensor and --units go with --column; with --columns give "
-                         "COLUMN:SENSOR:UNITS or --gyro-units/--accel-units")
-    json_path = _out_path(args.json) if args.json else None
-    out = _out_dir(args.out)
-    refuse_overwrite({"--json": json_path}, {"the record": args.file})
-    units = {s: u for s, u in (("gyro", args.gyro_units), ("accel", args.accel_units)) if u}
-    axes = resolve_axes(args.columns, units)
-    rec = _load(args, columns=[a.column for a in axes])
-    rec.require_contiguous("the Allan deviation")
+    rec = _load(args, columns=[spec.partition(":")[0] for spec in args.columns])
+    axes = _axes(args, args.columns, rec)
     for axis in axes:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
     noise = imu_noise({a.column: rec.column(a.column) for a in axes}, axes, rec.require_rate(),

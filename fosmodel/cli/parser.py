@@ -3,22 +3,28 @@
 from __future__ import annotations
 
 import argparse
-import math
-from typing import NoReturn
 
 import numpy as np
 
 from .._version import __version__
 from ..core.fos import STOP_RULES
 from ..io.loader import OUTLIER_K, OUTLIER_MODES
+from ..io.split import SplitSpec
+from ..noise.axes import UnitsSpec
 from . import commands
+from .parsing import CommandParser, Refused, parsed
 
 
-def _exog_arg(text: str) -> tuple[str, int]:
-    name, sep, lag = text.partition(":")
-    if not sep or not name or not lag.isdigit():
-        raise argparse.ArgumentTypeError(f"expected NAME:K (e.g. temp:5), got {text!r}")
-    return name, int(lag)
+def _exog_arg(text: str) -> list[tuple[str, int]]:
+    """``temp:5`` or ``temp:5,hum:2`` -> ``[(name, K), ...]``."""
+    out = []
+    for part in text.split(","):
+        name, sep, lag = part.strip().partition(":")
+        if not sep or not name or not lag.isdigit():
+            raise argparse.ArgumentTypeError(f"expected NAME:K[,NAME:K...] (e.g. temp:5), "
+                                             f"got {text!r}")
+        out.append((name, int(lag)))
+    return out
 
 
 def _positive_float(text: str) -> float:
@@ -72,55 +78,41 @@ def _name_list(text: str) -> list[str]:
     return [p.strip() for p in text.split(",") if p.strip()]
 
 
-def _split_arg(text: str) -> tuple[float, float]:
-    try:
-        train, evaluate = (float(p) for p in text.split(","))
-    except ValueError:
-        train = evaluate = math.nan
-    if not (math.isfinite(train) and math.isfinite(evaluate)):
-        raise argparse.ArgumentTypeError(f"expected TRAIN_S,EVALUATE_S, two finite seconds (e.g. "
-                                         f"180,180), got {text!r}")
-    return train, evaluate
+_SPLIT_HELP = ("training and evaluation lengths, each in seconds (180s; also min, h) or in "
+               "percent of the record (50%%); the rest is predicted")
+_UNITS_HELP = ("units of every column (deg/s) or per column (gx=deg/s,ax=g), which tell the "
+               "sensor: rad/s, deg/s, deg/h (gyro); m/s^2, g, mg (accel)")
 
 
-def _fractions(text: str) -> tuple[float, float]:
-    try:
-        train, evaluate = (float(p) for p in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected TRAIN,EVALUATE fractions (e.g. 0.5,0.2), "
-                                         f"got {text!r}") from None
-    return train, evaluate
-
-
-def _add_loader_options(parser: argparse.ArgumentParser) -> None:
+def _add_loader_options(parser: argparse.ArgumentParser, contiguous: str | None = None) -> None:
+    """The loader's options; ``contiguous`` names what needs a record without gaps, for which
+    ``--segments`` is refused."""
     parser.add_argument("--rate", type=_positive_float,
                         help="sample rate in Hz (if no time column)")
-    parser.add_argument("--scale", action="append", metavar="NAME=FACTOR",
+    parser.add_argument("--scale", type=_name_list, action="extend",
+                        metavar="NAME=FACTOR[,...]",
                         help="multiply column NAME by FACTOR, e.g. gx=1/131 for raw counts "
-                             "(repeatable)")
+                             "(comma-separated or repeated)")
     parser.add_argument("--uniform", action="store_true",
                         help="take the samples as uniformly spaced at the time column's "
                              "effective rate (a host's bursty receive time)")
     parser.add_argument("--outliers", choices=OUTLIER_MODES, default="keep",
-                        help=f"outliers (|x - median| > {OUTLIER_K:g} x 1.4826 MAD): keep (report, "
-                             "default), clip or drop")
+                        help=f"outliers (|x - median| > {OUTLIER_K:g} x 1.4826 MAD): keep (and "
+                             "report), clip or drop")
     gaps = parser.add_mutually_exclusive_group()
     gaps.add_argument("--fill", dest="gaps", action="store_const", const="fill",
                       help="fill gaps of the time column by linear interpolation")
-    gaps.add_argument("--segments", dest="gaps", action="store_const", const="segments",
-                      help="keep gaps and use the contiguous segments (fit and predict)")
+    if contiguous:
+        gaps.add_argument("--segments", action=Refused, why=f"{contiguous} needs a contiguous "
+                          "record; pass --fill to interpolate across the gaps")
+    else:
+        gaps.add_argument("--segments", dest="gaps", action="store_const", const="segments",
+                          help="keep gaps and use the contiguous segments")
     parser.set_defaults(gaps="refuse")
 
 
-class _Parser(argparse.ArgumentParser):
-    """An argument parser whose usage errors take one line, like every other error."""
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"fosmodel: error: {message} ({self.prog} --help shows the usage)\n")
-
-
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(
+    parser = CommandParser(
         prog="fosmodel",
         description="Fast Orthogonal Search error models for MEMS inertial sensors.",
     )
@@ -132,10 +124,10 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("file", help="CSV, .npy or .parquet record")
     fit.add_argument("--column", required=True, help="column to model")
     _add_loader_options(fit)
-    fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L (default 10)")
-    fit.add_argument("--degree", type=int, default=1, help="CP, cross-product degree (default 1)")
-    fit.add_argument("--exog", type=_exog_arg, action="append", metavar="NAME:K",
-                     help="exogenous column NAME with lags 0..K (repeatable)")
+    fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L")
+    fit.add_argument("--degree", type=int, default=1, help="CP, cross-product degree")
+    fit.add_argument("--exog", type=_exog_arg, action="extend", metavar="NAME:K[,NAME:K...]",
+                     help="exogenous columns NAME with lags 0..K (comma-separated or repeated)")
     fit.add_argument("--max-terms", type=int, help="most terms besides the constant")
     fit.add_argument("--stop", choices=STOP_RULES, default="korenberg", help="stopping rule")
     fit.add_argument("--tol", type=float, help="fraction for --stop variance / mean_square")
@@ -143,7 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="local levels of the output to offer: their time constants in "
                           "seconds, or 'auto' for a grid below the record's Allan floor")
     fit.add_argument("--max-candidates", type=_positive_int, default=100_000,
-                     help="refuse a candidate set larger than this (default 100000)")
+                     help="refuse a candidate set larger than this")
     fit.add_argument("--out", required=True, help="model file to write (JSON)")
     fit.set_defaults(func=commands.fit)
 
@@ -161,24 +153,27 @@ def build_parser() -> argparse.ArgumentParser:
                             "a report directory per file and column")
     study.add_argument("--columns", "--column", dest="columns", type=_name_list, required=True,
                        metavar="COL[,COL...]", help="columns to model, in every file")
-    _add_loader_options(study)
-    study.add_argument("--sensor", required=True, choices=("accel", "gyro"))
-    study.add_argument("--units", required=True,
-                       help="units of the column: m/s^2, g, mg (accel); rad/s, deg/s, deg/h (gyro)")
-    study.add_argument("--orders", type=_int_list, default=list(range(1, 11)),
-                       help="model orders, e.g. 1-10 (default) or 1,2,5")
-    study.add_argument("--degrees", type=_int_list, default=[1, 2],
-                       help="FOS cross-product degrees (default 1,2)")
-    study.add_argument("--methods", type=_name_list, default=["fos", "yw", "cov", "burg", "gm"],
-                       help="comma-separated among fos,yw,cov,burg,gm (default all)")
-    study.add_argument("--protocol", choices=("paper", "fair", "both"), default="both")
+    _add_loader_options(study, contiguous="the model-order study")
+    study.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS,...",
+                       help=_UNITS_HELP + " (default: from the column names, e.g. gx_dps, ax_g)")
+    study.add_argument("--sensor", choices=("accel", "gyro"),
+                       help="sensor of every column (the units tell it; checked against them)")
+    study.add_argument("--orders", type=_int_list, default="1-10",
+                       help="model orders, e.g. 1-10 or 1,2,5")
+    study.add_argument("--degrees", type=_int_list, default="1,2",
+                       help="FOS cross-product degrees")
+    study.add_argument("--methods", type=_name_list, default="fos,yw,cov,burg,gm",
+                       help="comma-separated among fos,yw,cov,burg,gm")
+    study.add_argument("--protocol", choices=("paper", "fair", "both"), default="both",
+                       help="paper: the baselines on denoised data; fair: every method on the "
+                            "raw data")
     study.add_argument("--no-levels", action="store_true",
                        help="leave out the methods about the local level (fair protocol)")
-    study.add_argument("--split", type=_split_arg, default=(180.0, 180.0),
-                       help="training and evaluation seconds (default 180,180)")
-    study.add_argument("--horizon", type=_positive_float, default=30.0,
-                       help="outage horizon in seconds (default 30)")
-    study.add_argument("--starts", type=int, default=20, help="outage starts (default 20)")
+    study.add_argument("--split", type=parsed(SplitSpec.parse), default="180s,180s",
+                       metavar="TRAIN,EVALUATE", help=_SPLIT_HELP)
+    study.add_argument("--horizon", type=_positive_float, default="30",
+                       help="outage horizon in seconds")
+    study.add_argument("--starts", type=int, default=20, help="outage starts")
     study.add_argument("--denoise", choices=("wavelet", "kaiser"), default="wavelet",
                        help="denoiser of the baselines under the paper protocol")
     study.add_argument("--stop", choices=STOP_RULES, default="korenberg", help="FOS stopping rule")
@@ -191,22 +186,25 @@ def build_parser() -> argparse.ArgumentParser:
                            "(e.g. tcp://10.0.0.5:8786)")
     dask.add_argument("--workers", type=_positive_int, metavar="N",
                       help="run the fits on a local Dask cluster of N single-threaded processes")
-    study.add_argument("--connect-timeout", type=_positive_float, default=10.0, metavar="S",
-                       help="seconds to wait for --scheduler (default 10)")
+    study.add_argument("--connect-timeout", type=_positive_float, default="10", metavar="S",
+                       help="seconds to wait for --scheduler")
     study.set_defaults(func=commands.study)
 
     loop = sub.add_parser("close-loop", help="find what the model lacks in its residual, "
                           "add it, report the error before and after")
     loop.add_argument("file", help="CSV, .npy or .parquet record")
     loop.add_argument("--column", required=True, help="column to model")
-    _add_loader_options(loop)
-    loop.add_argument("--aux", nargs="+", metavar="COL",
+    _add_loader_options(loop, contiguous="the residual loop")
+    loop.add_argument("--aux", type=_name_list, metavar="COL[,COL...]",
                       help="columns that may explain the residual (default: every other column)")
-    loop.add_argument("--sensor", choices=("accel", "gyro"), help="for position errors")
-    loop.add_argument("--units", help="units of the column (with --sensor)")
+    loop.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS",
+                      help="units of the column (deg/s, or gx=deg/s), which tell the sensor, "
+                           "for position errors (default: none, no position errors)")
+    loop.add_argument("--sensor", choices=("accel", "gyro"),
+                      help="sensor of the column (the units tell it; checked against them)")
     loop.add_argument("--max-lag", type=int, default=10, help="L of the starting model")
-    loop.add_argument("--split", type=_fractions, default=(0.5, 0.2),
-                      help="fractions for fitting and evaluation (default 0.5,0.2)")
+    loop.add_argument("--split", type=parsed(SplitSpec.parse), default="50%,20%",
+                      metavar="TRAIN,EVALUATE", help=_SPLIT_HELP)
     loop.add_argument("--title", help="title of the report")
     loop.add_argument("--out", required=True, help="output directory (created)")
     loop.add_argument("--json", help="also write the before/after metrics and effects as JSON")
@@ -223,14 +221,18 @@ def build_parser() -> argparse.ArgumentParser:
                        help="several axes in one run, e.g. gx,gy,gz,ax,ay,az: one table, one "
                             "figure per sensor, Kalibr/MATLAB/JSON exports; the sensor and "
                             "units come from the names (gx_dps, acc_y_mps2) where not given")
-    _add_loader_options(allan)
+    _add_loader_options(allan, contiguous="the Allan deviation")
+    allan.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS,...",
+                       help=_UNITS_HELP + "; for navigation units (default: --columns from "
+                                          "the names; --column in its own units)")
     allan.add_argument("--sensor", choices=("accel", "gyro"),
-                       help="sensor of --column, for navigation units")
-    allan.add_argument("--units", help="units of --column (with --sensor)")
+                       help="sensor of every column (the units tell it; checked against them)")
     allan.add_argument("--gyro-units", metavar="UNITS",
-                       help="units of the gyro columns of --columns (rad/s, deg/s, deg/h)")
+                       help="units of the gyro columns --units and the names do not give "
+                            "(rad/s, deg/s, deg/h)")
     allan.add_argument("--accel-units", metavar="UNITS",
-                       help="units of the accelerometer columns of --columns (m/s^2, g, mg)")
+                       help="units of the accelerometer columns --units and the names do not "
+                            "give (m/s^2, g, mg)")
     allan.add_argument("--min-tau", type=_positive_float,
                        help="shortest averaging time fitted, in s (default: found from the "
                             "curve, leaving out taus bent by the sensor's own filtering)")
@@ -245,7 +247,9 @@ def build_parser() -> argparse.ArgumentParser:
     configure_parser(synth).set_defaults(func=commands.synth)
 
     demo = sub.add_parser("demo", help="the main job on embedded synthetic data")
-    demo.add_argument("--out", default="fosmodel-out",
-                      help="output directory (default ./fosmodel-out)")
+    demo.add_argument("--out", default="fosmodel-out", help="output directory")
     demo.set_defaults(func=commands.demo)
+    for command in sub.choices.values():  # -v after the command too; SUPPRESS keeps one before
+        command.add_argument("-v", "--verbose", action="store_true", default=argparse.SUPPRESS,
+                             help="log details and tracebacks")
     return parser

@@ -8,7 +8,8 @@ killed run is removed by the next write to the same destination.  A report
 directory is written beside its destination and moved into place in one step
 (:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
 that no output names a file the command reads, however the two are spelt.
-:func:`write_tables` and :func:`save_figure` write a table (Markdown, CSV,
+:func:`writable_file` and :func:`writable_directory` check an output's path before anything
+is read.  :func:`write_tables` and :func:`save_figure` write a table (Markdown, CSV,
 LaTeX with booktabs rules, a caption and a label) and a figure (a 300 dpi PNG and an SVG, plain
 tick labels on a log axis of less than two decades) that way.
 """
@@ -74,6 +75,36 @@ def refuse_overwrite(outputs: Paths, inputs: Paths) -> None:
             if same_file(path, second):
                 raise InputError(f"{label} {path} and {other} {second} name the same file; "
                                  "give each output its own name")
+
+
+def writable_file(path: str | os.PathLike[str]) -> Path:
+    """Return ``path`` as an output file, checked before anything is read or computed.
+
+    Raises
+    ------
+    InputError
+        If its directory does not exist, or it is a directory.
+    """
+    out = Path(path)
+    if not out.parent.is_dir():
+        raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
+    if out.is_dir():
+        raise InputError(f"cannot write {out}: it is a directory")
+    return out
+
+
+def writable_directory(path: str | os.PathLike[str]) -> Path:
+    """Return ``path`` as a report's directory (:func:`report_directory` creates it at the end).
+
+    Raises
+    ------
+    InputError
+        If it is a file.
+    """
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"cannot write a report into {out}: it is a file, not a directory")
+    return out
 
 
 def _temporary_name(path: Path, suffix: str) -> Path:

@@ -2,8 +2,9 @@
 
 A unit belongs to one sensor (:func:`fosmodel.noise.metrics.sensor_of`: deg/s,
 rad/s, deg/h are a gyro's, m/s^2, g, mg an accelerometer's), so units given per
-column (:class:`UnitsSpec`, ``gx=deg/s,ax=g``) say everything; a column without
-them is read from its name (:func:`infer_axis`): ``gx``, ``gyro_x``, ``wx``,
+column (:class:`UnitsSpec`, ``gx=deg/s,ax=g``) or declared by the file (a ROS
+bag's, a ULog's) say everything; a column without them is read from its name
+(:func:`infer_axis`): ``gx``, ``gyro_x``, ``wx``,
 ``angular_velocity.x`` are gyros, ``ax``, ``acc_x``, ``linear_acceleration.x``
 accelerometers, and a suffix ``_dps``, ``_rads``, ``_g``, ``_mg``, ``_mps2``
 gives the units.  :func:`resolve_axes` puts these together, with a sensor or
@@ -46,7 +47,7 @@ class Axis:
     column: str
     sensor: str
     units: str
-    told: str  # "given", "units given", "from the name", "gyro from the name, units given"
+    told: str  # "given", "units given", "units from the file", "from the name", ...
 
     def describe(self) -> str:
         return f"{self.column}: {self.sensor} in {self.units} ({self.told})"
@@ -150,12 +151,14 @@ def _units_in(sensor: str, rest: str) -> str | None:
 
 
 def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None, *,
-                 given: UnitsSpec | None = None, sensor: str | None = None) -> list[Axis]:
+                 given: UnitsSpec | None = None, declared: Mapping[str, str] | None = None,
+                 sensor: str | None = None) -> list[Axis]:
     """Each column's sensor and units.
 
-    In this order: given with the column as ``name:sensor:units``; the units ``given`` for it
-    (they tell its sensor); else its sensor is ``sensor`` or the one its name tells, and its
-    units those of ``units`` (per sensor) or the ones its name tells.
+    In this order: given with the column as ``name:sensor:units``; the units ``given`` for it,
+    then those its file ``declared`` (either tells its sensor); else its sensor is ``sensor`` or
+    the one its name tells, and its units those of ``units`` (per sensor) or the ones its name
+    tells.
 
     Parameters
     ----------
@@ -165,6 +168,8 @@ def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None,
         Units per sensor (``{"gyro": "deg/s"}``), for the columns ``given`` says nothing of.
     given : UnitsSpec, optional
         Units per column and for every column.
+    declared : mapping of str to str, optional
+        Units per column that the record's file says (``Record.units`` of a ROS bag or a ULog).
     sensor : {"gyro", "accel"}, optional
         The sensor of every column: a column whose units tell another is refused.
 
@@ -188,10 +193,11 @@ def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None,
     if stray:
         raise InputError(f"units are given for column {stray[0]!r}, which is not among the "
                          f"columns: {', '.join(names)}")
-    return [_resolve(spec, units, given, sensor) for spec in columns]
+    declared = dict(declared or {})
+    return [_resolve(spec, units, given, declared, sensor) for spec in columns]
 
 
-def _resolve(spec: str, units: Mapping[str, str], given: UnitsSpec,
+def _resolve(spec: str, units: Mapping[str, str], given: UnitsSpec, declared: Mapping[str, str],
              sensor: str | None) -> Axis:
     column, *inline = spec.split(":")
     if inline:
@@ -203,6 +209,9 @@ def _resolve(spec: str, units: Mapping[str, str], given: UnitsSpec,
     told = given.of(column)
     if told is not None:
         return _checked(Axis(column, sensor_of(told), told, "units given"), sensor)
+    if column in declared:
+        told = declared[column]
+        return _checked(Axis(column, sensor_of(told), told, "units from the file"), sensor)
     named_sensor, named_units = infer_axis(column)
     if sensor and named_sensor and named_sensor != sensor:
         raise InputError(f"column {column!r}: its name tells {_NAMED[named_sensor]}, not "

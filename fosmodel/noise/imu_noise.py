@@ -27,11 +27,9 @@ trusts that axis too much.  A term the fit does not resolve is exported as
 its upper limit, never as 0 (Kalibr refuses a zero random walk, and zero
 would claim a bias that never moves); the files say which values are limits.
 
-Column names tell the sensor and often the units (:func:`infer_axis`):
-``gx``, ``gyro_x``, ``wx``, ``angular_velocity.x`` are gyros, ``ax``,
-``acc_x``, ``linear_acceleration.x`` accelerometers; a suffix ``_dps``,
-``_rads``, ``_g``, ``_mg``, ``_mps2`` gives the units.  What is not in the
-name is given per column (``gx:gyro:deg/s``) or per sensor.
+Each axis's sensor and units are given per column (``gx=deg/s``, whose units
+tell the sensor), declared by its file or read from its name (``gx_dps``): see
+:mod:`fosmodel.noise.axes`.
 
 References
 ----------
@@ -64,129 +62,15 @@ from ..io.output import save_figure, write_tables, write_text
 from ..models.latex import mathtext_units
 from ..models.summary import Summary
 from .allan import AllanResult, NoiseFit, allan_deviation, fit_noise, write_allan
+from .axes import SENSORS, Axis
 from .metrics import to_si_scale
 
-SENSORS = ("gyro", "accel")
 #: Exported terms: white noise, bias instability, rate random walk.
 EXPORTED = ("N", "B", "K")
 _SI_UNITS = {
     "gyro": {"N": "rad/s/sqrt(Hz)", "B": "rad/s", "K": "rad/s^2/sqrt(Hz)"},
     "accel": {"N": "m/s^2/sqrt(Hz)", "B": "m/s^2", "K": "m/s^3/sqrt(Hz)"},
 }
-#: Name prefixes before the axis letter (``gx``, ``gyro_x``, ``angular_velocity.x``); the
-#: one-letter ones only right before it.
-_PREFIXES = {
-    "gyro": ("gyroscope", "gyro", "gyr", "angular_velocity", "ang_vel", "omega", "g", "w"),
-    "accel": ("accelerometer", "linear_acceleration", "accel", "acc", "a"),
-}
-#: Units spelled in a name after the sensor and axis (``gx_dps``, ``gyro_rad[0]``, ``ax_g``).
-_UNIT_WORDS = {
-    "gyro": {"dps": "deg/s", "degs": "deg/s", "deg_s": "deg/s", "deg": "deg/s",
-             "rads": "rad/s", "rad_s": "rad/s", "radps": "rad/s", "rps": "rad/s",
-             "rad": "rad/s", "dph": "deg/h", "deg_h": "deg/h"},
-    "accel": {"g": "g", "mg": "mg", "mps2": "m/s^2", "ms2": "m/s^2", "m_s2": "m/s^2",
-              "m_s_2": "m/s^2"},
-}
-
-
-@dataclass(frozen=True)
-class Axis:
-    """A column to analyse: its sensor, its units and where each came from."""
-
-    column: str
-    sensor: str
-    units: str
-    told: str  # "given", "from the name", or "from --gyro-units"-like text
-
-    def describe(self) -> str:
-        return f"{self.column}: {self.sensor} in {self.units} ({self.told})"
-
-
-def infer_axis(column: str) -> tuple[str | None, str | None]:
-    """The sensor (``"gyro"``/``"accel"``) and units a column's name tells, or None for each.
-
-    Examples
-    --------
-    >>> infer_axis("gx_dps"), infer_axis("acc_y"), infer_axis("temp")
-    (('gyro', 'deg/s'), ('accel', None), (None, None))
-    """
-    name = column.strip().lower()
-    for sensor, prefixes in _PREFIXES.items():
-        for prefix in prefixes:
-            rest = _after_prefix(name, prefix)
-            if rest is not None:
-                return sensor, _units_in(sensor, rest)
-    return None, None
-
-
-def _after_prefix(name: str, prefix: str) -> str | None:
-    """What follows ``prefix`` and the axis in ``name``, or None if ``name`` is not of it.
-
-    A one-letter prefix must be followed by the axis letter (``gx``, not ``gain``); a longer one
-    by a separator or the axis letter (``gyro_x``, ``gyrox``, ``gyro_rad[0]``).
-    """
-    if not name.startswith(prefix):
-        return None
-    rest = name[len(prefix):]
-    axis = re.match(r"[xyz](?![a-z])", rest)
-    if axis:
-        return rest[axis.end():]
-    if len(prefix) > 1 and rest[:1] in ("_", ".", "-", " ", "[", "("):
-        return rest
-    return None
-
-
-def _units_in(sensor: str, rest: str) -> str | None:
-    """Units named in the rest of a column name: its words, joined by underscores."""
-    words = [w for w in re.split(r"[^a-z0-9]+", rest) if w and w not in ("x", "y", "z")
-             and not w.isdigit()]
-    joined = "_".join(words)
-    for spelled, units in _UNIT_WORDS[sensor].items():
-        if joined == spelled or spelled in words:
-            return units
-    return None
-
-
-def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None) -> list[Axis]:
-    """Each column's sensor and units: given as ``name:sensor:units``, else from its name,
-    with the units of ``units`` (per sensor) where the name does not tell them.
-
-    Raises
-    ------
-    InputError
-        A column whose sensor or units cannot be told (the message says how to give them), an
-        unknown sensor or units, or a column named twice.
-    """
-    units = dict(units or {})
-    out = [_resolve(spec, units) for spec in columns]
-    names = [a.column for a in out]
-    twice = sorted({n for n in names if names.count(n) > 1})
-    if twice:
-        raise InputError(f"column {twice[0]!r} is named twice in --columns")
-    if not out:
-        raise InputError("no columns to analyse")
-    return out
-
-
-def _resolve(spec: str, units: Mapping[str, str]) -> Axis:
-    column, *given = spec.split(":")
-    if given:
-        if len(given) != 2 or not all(given):
-            raise InputError(f"expected COLUMN or COLUMN:SENSOR:UNITS (e.g. gx:gyro:deg/s), "
-                             f"got {spec!r}")
-        to_si_scale(given[0], given[1])  # refuses unknown sensors and units, listing them
-        return Axis(column, given[0], given[1], "given")
-    sensor, named = infer_axis(column)
-    if sensor is None:
-        raise InputError(f"column {column!r}: its name does not tell the sensor; give it as "
-                         f"{column}:gyro:UNITS or {column}:accel:UNITS")
-    if sensor in units:
-        to_si_scale(sensor, units[sensor])
-        return Axis(column, sensor, units[sensor], f"{sensor} from the name, units given")
-    if named is None:
-        raise InputError(f"column {column!r}: a {sensor} by its name, but the name does not "
-                         f"tell its units; give --{sensor}-units or {column}:{sensor}:UNITS")
-    return Axis(column, sensor, named, "from the name")
 
 
 @dataclass(frozen=True)
@@ -420,7 +304,7 @@ def imu_noise(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: flo
     columns : mapping of str to ndarray
         The rate signals by column name (each axis's ``column`` must be in it).
     axes : sequence of Axis
-        The columns with their sensors and units (:func:`resolve_axes`).
+        The columns with their sensors and units (:func:`fosmodel.noise.axes.resolve_axes`).
     rate : float
         Sample rate in Hz.
     source : str

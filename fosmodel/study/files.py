@@ -12,7 +12,7 @@ directory each with their best rows side by side), and :func:`overview` and
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
@@ -66,9 +66,10 @@ def check_report_names(files: Sequence[str], columns: Sequence[str]) -> None:
             seen[name] = (path, column)
 
 
-def plan_columns(record: Record, path: str, columns: Sequence[str],
-                 config: StudyConfig) -> list[ColumnStudy]:
-    """Each column of ``record`` (read from ``path``) checked and planned under ``config``.
+def plan_columns(record: Record, path: str,
+                 configs: Mapping[str, StudyConfig]) -> list[ColumnStudy]:
+    """Each column of ``configs`` in ``record`` (read from ``path``), checked and planned under
+    its own config (its sensor and units).
 
     Raises
     ------
@@ -77,7 +78,7 @@ def plan_columns(record: Record, path: str, columns: Sequence[str],
     """
     record.require_contiguous("the model-order study")
     out = []
-    for column in columns:
+    for column, config in configs.items():
         try:
             plan = plan_study(record.column(column), config)
         except InputError as exc:
