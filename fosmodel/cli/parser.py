@@ -63,7 +63,7 @@ def _levels_arg(text: str) -> list[float] | str:
 
 def _int_list(text: str) -> list[int]:
     """``1-10`` or ``1,2,5`` or ``1-3,8`` -> a list of integers."""
-    out = []
+    out: list[int] = []
     for part in text.split(","):
         lo, sep, hi = part.strip().partition("-")
         try:
@@ -85,8 +85,10 @@ _UNITS_HELP = ("units of every column (deg/s) or per column (gx=deg/s,ax=g), whi
 
 
 def _add_loader_options(parser: argparse.ArgumentParser, contiguous: str | None = None) -> None:
-    """The loader's options; ``contiguous`` names what needs a record without gaps, for which
-    ``--segments`` is refused."""
+    """Add the loader's options.
+
+    ``contiguous`` names what needs a record without gaps: ``--segments`` is refused for it.
+    """
     parser.add_argument("--rate", type=_positive_float,
                         help="sample rate in Hz (if no time column)")
     parser.add_argument("--scale", type=_name_list, action="extend",
@@ -112,6 +114,7 @@ def _add_loader_options(parser: argparse.ArgumentParser, contiguous: str | None 
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """Build the parser of every command, each calling its function of :mod:`.commands`."""
     parser = CommandParser(
         prog="fosmodel",
         description="Fast Orthogonal Search error models for MEMS inertial sensors.",

@@ -1,31 +1,42 @@
-"""How the command line is read: one-line usage errors, help that shows each option's default,
-options a command refuses with the reason, and argument types over the library's parsers."""
+"""How the command line is read, around :mod:`argparse`.
+
+One-line usage errors, help that ends each option with its default, options a command refuses
+with the reason, and argument types over the library's parsers.
+"""
 
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
-from typing import Any, NoReturn
+from collections.abc import Callable, Sequence
+from typing import Any, NoReturn, TypeVar
 
 from ..core.exceptions import InputError
 
+T = TypeVar("T")
+
 
 class CommandParser(argparse.ArgumentParser):
-    """An argument parser whose usage errors take one line, like every other error, and whose
-    help ends each option with its default (its subcommands' too)."""
+    """An argument parser whose usage errors take one line, like every other error.
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        kwargs.setdefault("formatter_class", DefaultsFormatter)
-        super().__init__(*args, **kwargs)
+    Its help, and its subcommands' (parsers of its class), shows each option's default
+    (:class:`DefaultsFormatter`).
+    """
 
     def error(self, message: str) -> NoReturn:
+        """Exit with code 2 after one line: the message and where the usage is."""
         self.exit(2, f"fosmodel: error: {message} ({self.prog} --help shows the usage)\n")
+
+    def _get_formatter(self) -> argparse.HelpFormatter:
+        return DefaultsFormatter(prog=self.prog)
 
 
 class DefaultsFormatter(argparse.HelpFormatter):
-    """Ends the help of each option that takes a value with ``(default: ...)``, where it has a
-    default and its help does not say it already; a flag or an option without default shows
-    none (argparse's ArgumentDefaultsHelpFormatter would print ``(default: None)``)."""
+    """Ends the help of each option that takes a value with ``(default: ...)``.
+
+    Only where it has a default and its help does not say it already: a flag or an option
+    without default shows none (argparse's ArgumentDefaultsHelpFormatter would print
+    ``(default: None)``).
+    """
 
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
@@ -36,22 +47,27 @@ class DefaultsFormatter(argparse.HelpFormatter):
 
 
 class Refused(argparse.Action):
-    """An option a command does not offer: refused with the reason ``why``, hidden from its
-    help (a loader option that makes no sense for the command)."""
+    """An option a command does not offer: refused with the reason ``why``.
 
-    def __init__(self, option_strings: list[str], dest: str, why: str, **kwargs: Any) -> None:
-        super().__init__(option_strings, dest, nargs=0, help=argparse.SUPPRESS, **kwargs)
+    It is hidden from the command's help: a loader option that makes no sense for the command.
+    """
+
+    def __init__(self, option_strings: Sequence[str], dest: str, why: str) -> None:
+        super().__init__(option_strings, dest, nargs=0, help=argparse.SUPPRESS)
         self.why = why
 
     def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
-                 values: Any, option_string: str | None = None) -> NoReturn:
+                 values: str | Sequence[Any] | None, option_string: str | None = None) -> NoReturn:
+        """Refuse the option as a usage error that gives the reason."""
         parser.error(f"argument {option_string}: {self.why}")
 
 
-def parsed(parse: Callable[[str], Any]) -> Callable[[str], Any]:
-    """An argument type that reads with a library parser (``SplitSpec.parse``), its
-    :class:`~fosmodel.core.exceptions.InputError` a usage error of the option."""
-    def read(text: str) -> Any:
+def parsed(parse: Callable[[str], T]) -> Callable[[str], T]:
+    """Make an argument type of a library parser (``SplitSpec.parse``).
+
+    Its :class:`~fosmodel.core.exceptions.InputError` becomes a usage error of the option.
+    """
+    def read(text: str) -> T:
         try:
             return parse(text)
         except InputError as exc:

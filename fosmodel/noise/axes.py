@@ -50,6 +50,7 @@ class Axis:
     told: str  # "given", "units given", "units from the file", "from the name", ...
 
     def describe(self) -> str:
+        """Say the column's sensor and units and how they were told (``gx: gyro in deg/s``...)."""
         return f"{self.column}: {self.sensor} in {self.units} ({self.told})"
 
 
@@ -101,12 +102,12 @@ class UnitsSpec:
         return cls(every, columns)
 
     def of(self, column: str) -> str | None:
-        """The units given for ``column``, or None."""
+        """Return the units given for ``column``, or None."""
         return self.columns.get(column, self.every)
 
 
 def infer_axis(column: str) -> tuple[str | None, str | None]:
-    """The sensor (``"gyro"``/``"accel"``) and units a column's name tells, or None for each.
+    """Tell the sensor (``"gyro"``/``"accel"``) and units a column's name gives, or None each.
 
     Examples
     --------
@@ -123,7 +124,7 @@ def infer_axis(column: str) -> tuple[str | None, str | None]:
 
 
 def _after_prefix(name: str, prefix: str) -> str | None:
-    """What follows ``prefix`` and the axis in ``name``, or None if ``name`` is not of it.
+    """Return what follows ``prefix`` and the axis in ``name``, or None if it is not of it.
 
     A one-letter prefix must be followed by the axis letter (``gx``, not ``gain``); a longer one
     by a separator or the axis letter (``gyro_x``, ``gyrox``, ``gyro_rad[0]``).

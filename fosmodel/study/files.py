@@ -68,8 +68,9 @@ def check_report_names(files: Sequence[str], columns: Sequence[str]) -> None:
 
 def plan_columns(record: Record, path: str,
                  configs: Mapping[str, StudyConfig]) -> list[ColumnStudy]:
-    """Each column of ``configs`` in ``record`` (read from ``path``), checked and planned under
-    its own config (its sensor and units).
+    """Check and plan each column of ``configs`` in ``record`` under its own config.
+
+    Each config carries its column's sensor and units; ``path`` names the file in messages.
 
     Raises
     ------
@@ -125,7 +126,7 @@ def combined_best(studies: Sequence[ColumnStudy],
 
 
 def overview(studies: Sequence[ColumnStudy], results: Sequence[StudyResult]) -> pd.DataFrame:
-    """The comparison table of one study, or the main columns of every study's best rows."""
+    """Return the comparison table of one study, or the main columns of every study's best."""
     if len(studies) == 1:
         return paper_table(results[0])
     table = combined_best(studies, results)
