@@ -155,7 +155,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="CSV, .npy or .parquet records; with several files or columns, "
                             "a report directory per file and column")
     study.add_argument("--columns", "--column", dest="columns", type=_name_list, required=True,
-                       metavar="COL[,COL...]", help="columns to model, in every file")
+                       metavar="COL[:SENSOR:UNITS],...",
+                       help="columns to model, in every file (COL:SENSOR:UNITS also gives a "
+                            "column's sensor and units)")
     _add_loader_options(study, contiguous="the model-order study")
     study.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS,...",
                        help=_UNITS_HELP + " (default: from the column names, e.g. gx_dps, ax_g)")
