@@ -540,6 +540,9 @@ def test_a_scale_list_reads_as_the_repeated_option(tmp_path, capsys, spiky_csv):
     (["allan", "r.csv", "--column", "gx", "--segments", "--out", "o"],
      "argument --segments: the Allan deviation needs a contiguous record; pass --fill to "
      "interpolate across the gaps (fosmodel allan --help shows the usage)"),
+    (["fit", "r.csv", "--column", "gx", "--exog", "temp:2,hum", "--out", "m"],
+     "argument --exog: expected NAME:K[,NAME:K...] (e.g. temp:5), got 'temp:2,hum' (fosmodel fit "
+     "--help shows the usage)"),
     (["close-loop", "r.csv", "--column", "gx", "--segments", "--out", "o"],
      "argument --segments: the residual loop needs a contiguous record; pass --fill to "
      "interpolate across the gaps (fosmodel close-loop --help shows the usage)"),
