@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from fosmodel import cli
 from fosmodel.core.exceptions import InputError
 from fosmodel.io.loader import load_record
 from fosmodel.io.topics import ImuTopic, TopicError, imu_topics, read_topic
@@ -219,3 +220,21 @@ def test_without_the_ros_extra(imu_bag, monkeypatch):
     assert _message(lambda: load_record(path)) == (
         f"{path}: reading ROS bags needs the 'ros' extra: pip install 'fosmodel[ros]'")
 
+
+def test_the_command_line_on_a_bag(imu_bag, tmp_path, capsys):
+    path, _ = imu_bag("imu", "mcap", imu={"/imu0": 4000, "/imu1": 100})
+    model = tmp_path / "gx.json"
+    assert cli.main(["fit", str(path), "--topic", "/imu0", "--column", "gx", "--max-lag", "2",
+                     "--out", str(model)]) == 0
+    assert model.is_file()
+    out = tmp_path / "allan"
+    assert cli.main(["allan", str(path), "--topic", "/imu0", "--columns", ",".join(COLUMNS),
+                     "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "fosmodel: gx: gyro in rad/s (units from the file)" in err
+    assert "fosmodel: az: accel in m/s^2 (units from the file)" in err
+    assert (out / "imu.yaml").is_file()
+    assert cli.main(["fit", str(path), "--column", "gx", "--out", str(model)]) == 2
+    assert capsys.readouterr().err == (
+        f"fosmodel: error: {path}: 2 IMU topics, choose one with --topic: /imu0 "
+        "(sensor_msgs/msg/Imu, 4000 messages), /imu1 (sensor_msgs/msg/Imu, 100 messages)\n")

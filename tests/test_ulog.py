@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fosmodel import cli
 from fosmodel.core.exceptions import InputError
 from fosmodel.io.loader import load_record
 from fosmodel.io.topics import ImuTopic, TopicError, imu_topics
@@ -173,3 +174,19 @@ def test_without_the_px4_extra(tmp_path, monkeypatch):
     assert _message(lambda: load_record(path)) == (
         f"{path}: reading PX4 ULog files needs the 'px4' extra: pip install 'fosmodel[px4]'")
 
+
+@needs_logs
+def test_the_command_line_on_a_log(tmp_path, capsys):
+    out = tmp_path / "allan"
+    argv = ["allan", str(SAMPLE), "--topic", "sensor_combined", "--columns", ",".join(COLUMNS),
+            "--out", str(out)]
+    assert cli.main(argv) == 2  # the log's gaps, told as for any record
+    assert "a gap of 0.036 s" in capsys.readouterr().err
+    assert cli.main([*argv, "--fill"]) == 0
+    err = capsys.readouterr().err
+    assert "fosmodel: gx: gyro in rad/s (units from the file)" in err
+    assert (out / "imu.yaml").is_file()
+    model = tmp_path / "m.json"
+    assert cli.main(["fit", str(SMALL), "--column", "gx", "--out", str(model)]) == 2
+    assert capsys.readouterr().err.startswith(
+        f"fosmodel: error: {SMALL}: 10 IMU topics, choose one with --topic: sensor_accel:0 ")

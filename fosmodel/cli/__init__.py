@@ -15,6 +15,7 @@ import traceback
 import warnings
 
 from ..core.exceptions import InputError
+from ..io.sensor_log import TopicError
 from .parser import build_parser
 
 __all__ = ["build_parser", "main"]
@@ -42,7 +43,8 @@ def _run(args: argparse.Namespace) -> int:
     try:
         return args.func(args)
     except InputError as exc:
-        print(f"fosmodel: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        message = exc.with_flag() if isinstance(exc, TopicError) else str(exc)
+        print(f"fosmodel: error: {' '.join(message.split())}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("fosmodel: interrupted", file=sys.stderr)

@@ -44,7 +44,8 @@ def _load(args: argparse.Namespace, path: str | None = None,
     """
     rec = load_record(path or args.file, columns=columns, rate=args.rate,
                       scale=parse_scales(args.scale or []), uniform=args.uniform,
-                      outliers=args.outliers, gaps=args.gaps)
+                      outliers=args.outliers, gaps=args.gaps, topic=args.topic,
+                      temperature_topic=args.temperature_topic)
     for note in rec.notes:
         print(f"fosmodel: note: {path + ': ' if path else ''}{note}", file=sys.stderr)
     return rec
