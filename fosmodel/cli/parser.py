@@ -14,6 +14,10 @@ from ..noise.axes import UnitsSpec
 from . import commands
 from .parsing import CommandParser, Refused, parsed
 
+#: What a record argument may be.
+RECORD_HELP = ("record: CSV, .npy, .parquet, a ROS bag (.bag, a ROS 2 bag directory, .db3, "
+               ".mcap) or a PX4 ULog (.ulg)")
+
 
 def _exog_arg(text: str) -> list[tuple[str, int]]:
     """``temp:5`` or ``temp:5,hum:2`` -> ``[(name, K), ...]``."""
@@ -110,6 +114,13 @@ def _add_loader_options(parser: argparse.ArgumentParser, contiguous: str | None 
     else:
         gaps.add_argument("--segments", dest="gaps", action="store_const", const="segments",
                           help="keep gaps and use the contiguous segments")
+    parser.add_argument("--topic", metavar="NAME",
+                        help="IMU topic of a ROS bag or PX4 ULog file that has several "
+                             "(e.g. /imu/data, sensor_gyro:1)")
+    parser.add_argument("--temperature-topic", metavar="NAME",
+                        help="topic of a log whose temperature becomes the column temperature, "
+                             "interpolated onto the IMU samples (default: a bag's only "
+                             "sensor_msgs/msg/Temperature topic)")
     parser.set_defaults(gaps="refuse")
 
 
@@ -124,7 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     fit = sub.add_parser("fit", help="fit a FOS model to one column of a record")
-    fit.add_argument("file", help="CSV, .npy or .parquet record")
+    fit.add_argument("file", help=RECORD_HELP)
     fit.add_argument("--column", required=True, help="column to model")
     _add_loader_options(fit)
     fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L")
@@ -143,7 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.set_defaults(func=commands.fit)
 
     pred = sub.add_parser("predict", help="one-step-ahead prediction with a saved model")
-    pred.add_argument("file", help="CSV, .npy or .parquet record")
+    pred.add_argument("file", help=RECORD_HELP)
     pred.add_argument("--model", required=True, help="model file written by 'fosmodel fit'")
     pred.add_argument("--column", help="column to predict (default: the one the model was fit on)")
     _add_loader_options(pred)
@@ -152,8 +163,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     study = sub.add_parser("study", help="model-order study: every method, order and degree")
     study.add_argument("files", nargs="+", metavar="FILE",
-                       help="CSV, .npy or .parquet records; with several files or columns, "
-                            "a report directory per file and column")
+                       help=RECORD_HELP.replace("record:", "records:") + "; with several "
+                            "files or columns, a report directory per file and column")
     study.add_argument("--columns", "--column", dest="columns", type=_name_list, required=True,
                        metavar="COL[:SENSOR:UNITS],...",
                        help="columns to model, in every file (COL:SENSOR:UNITS also gives a "
@@ -197,7 +208,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     loop = sub.add_parser("close-loop", help="find what the model lacks in its residual, "
                           "add it, report the error before and after")
-    loop.add_argument("file", help="CSV, .npy or .parquet record")
+    loop.add_argument("file", help=RECORD_HELP)
     loop.add_argument("--column", required=True, help="column to model")
     _add_loader_options(loop, contiguous="the residual loop")
     loop.add_argument("--aux", type=_name_list, metavar="COL[,COL...]",
@@ -219,7 +230,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     allan = sub.add_parser("allan", help="Allan deviation with confidence intervals and the "
                            "IEEE Std 952 noise coefficients")
-    allan.add_argument("file", help="CSV, .npy or .parquet record")
+    allan.add_argument("file", help=RECORD_HELP)
     which = allan.add_mutually_exclusive_group(required=True)
     which.add_argument("--column", help="column to analyse (a rate signal)")
     which.add_argument("--columns", type=_name_list, metavar="COL[:SENSOR:UNITS],...",
