@@ -82,14 +82,16 @@ class AxisNoise:
     fit: NoiseFit
 
     def value(self, term: str) -> tuple[float, str]:
-        """A term's coefficient in the record's units and what it is: ``"fitted"``,
-        ``"upper limit"`` (not resolved) or ``"not fitted"`` (NaN)."""
+        """Return a term's coefficient in the record's units and what it is.
+
+        That is ``"fitted"``, ``"upper limit"`` (not resolved) or ``"not fitted"`` (NaN).
+        """
         if term not in self.fit.terms:
             return math.nan, "not fitted"
         return self.fit.conservative(term)
 
     def si(self, term: str) -> float:
-        """A term's exported value (:meth:`value`) in SI: rad/s or m/s^2 based."""
+        """Return a term's exported value (:meth:`value`) in SI: rad/s or m/s^2 based."""
         return self.value(term)[0] * to_si_scale(self.axis.sensor, self.axis.units)
 
 
@@ -102,11 +104,11 @@ class ImuNoise:
     source: str
 
     def of(self, sensor: str) -> list[AxisNoise]:
-        """The axes of one sensor type, in the order given."""
+        """Return the axes of one sensor type, in the order given."""
         return [a for a in self.axes if a.axis.sensor == sensor]
 
     def worst(self, sensor: str, term: str) -> tuple[float, AxisNoise] | None:
-        """The largest SI value of a term over a sensor's axes, and its axis (None if none)."""
+        """Return the largest SI value of a term over a sensor's axes, and its axis (or None)."""
         axes = [a for a in self.of(sensor) if math.isfinite(a.si(term))]
         if not axes:
             return None
@@ -114,15 +116,18 @@ class ImuNoise:
         return top.si(term), top
 
     def table(self) -> pd.DataFrame:
-        """One row per axis: N, B, K (a limit as "< value") beside the classic read-offs and the
-        datasheet's in-run bias stability, in navigation units; and how the fit follows."""
+        """Tabulate N, B, K of each axis beside the classic read-offs, in navigation units.
+
+        A limit reads "< value"; beside them the datasheet's in-run bias stability, and how
+        the fit follows the curve.
+        """
         return pd.DataFrame([_row(a) for a in self.axes])
 
     def si_table(self) -> pd.DataFrame:
         """One row per axis: the exported values in SI and whether each is a limit."""
         rows = []
         for a in self.axes:
-            row = {"Column": a.axis.column, "Sensor": a.axis.sensor}
+            row: dict[str, object] = {"Column": a.axis.column, "Sensor": a.axis.sensor}
             for term in EXPORTED:
                 row[f"{term} ({_SI_UNITS[a.axis.sensor][term]})"] = a.si(term)
                 row[f"{term} is"] = a.value(term)[1]
@@ -130,7 +135,7 @@ class ImuNoise:
         return pd.DataFrame(rows)
 
     def summary(self) -> Summary:
-        """The table with the record's facts and how each column's sensor and units were told."""
+        """Summarise the record's facts and how each column's sensor and units were told."""
         info = [("Source", Path(self.source).name), ("Rate", f"{self.rate:g} Hz"),
                 ("Axes", f"{len(self.axes)}"),
                 ("Samples", f"{self.axes[0].result.n_samples}")]
@@ -147,8 +152,11 @@ class ImuNoise:
                        notes)
 
     def to_dict(self) -> dict[str, Any]:
-        """Per axis the exported values in SI (with their units and whether each is a limit) and
-        the full fit; per sensor the one-number values (largest axis)."""
+        """Return the exported values as a JSON-ready dict: per axis and per sensor.
+
+        Per axis the values in SI (with their units and whether each is a limit) and the full
+        fit; per sensor the one-number values (largest axis).
+        """
         axes = []
         for a in self.axes:
             terms = {}
@@ -197,7 +205,11 @@ class ImuNoise:
         for sensor, title in (("accel", "Accelerometers"), ("gyro", "Gyroscopes")):
             lines.append(f"# {title}")
             for term, field in (("N", "noise_density"), ("K", "random_walk")):
-                value, axis = self.worst(sensor, term)
+                top = self.worst(sensor, term)
+                if top is None:
+                    raise InputError(f"a Kalibr imu.yaml needs the {sensor} {field} (Allan "
+                                     f"{term}); no {sensor} axis has it fitted")
+                value, axis = top
                 kind = axis.value(term)[1]
                 note = "" if kind == "fitted" else f", {kind}: the fit does not resolve it"
                 lines.append(f"{_KALIBR_NAME[sensor]}_{field}: {value:.6e}  "
@@ -236,8 +248,7 @@ class ImuNoise:
         return "\n".join(lines) + "\n"
 
     def figures(self) -> dict[str, Figure]:
-        """One figure per sensor type: every axis's deviation, band and fitted curve above,
-        fit/data below."""
+        """Plot one figure per sensor type: each axis's deviation, band and fit; fit/data below."""
         return {sensor: _sensor_figure(self.of(sensor), sensor) for sensor in SENSORS
                 if self.of(sensor)}
 
@@ -325,7 +336,7 @@ def imu_noise(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: flo
 
 
 def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str) -> list[Path]:
-    """The report of several axes in ``out_dir``.
+    """Write the report of several axes in ``out_dir``.
 
     ``noise.md/csv/tex`` (the table), ``noise_si.md/csv/tex`` (the exported SI values),
     ``allan_gyro.png/svg`` and ``allan_accel.png/svg``, ``imu_noise.json``,
@@ -353,7 +364,7 @@ def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str) -> list[Path]:
 
 
 def _safe(column: str) -> str:
-    """A column name as a folder name."""
+    """Return a column name as a folder name."""
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", column) or "column"
 
 
