@@ -99,6 +99,8 @@ def test_steady_state_gain_is_the_limit_of_the_recursive_filter():
                                atol=1e-10 * np.abs(gain[1:]).max())
     early = recursive_gain(model, 20)
     assert np.abs(early[1:] - gain[1:]).max() > 0.1 * np.abs(gain[1:]).max()
+    with pytest.raises(InputError, match=r"^n_steps must be at least 1, got 0$"):
+        recursive_gain(model, 0)  # no update, so no gain
 
 
 def test_kalman_equals_averaging_for_equal_uncorrelated_gyros():

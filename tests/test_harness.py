@@ -171,3 +171,11 @@ def test_every_method_is_also_fit_about_the_local_level():
 def test_bad_input(y, kw, message):
     with pytest.raises(InputError, match=message):
         run_study(y, _config(**kw))
+
+
+def test_a_baseline_about_the_level_needs_its_time_constant():
+    config = _config()
+    assert harness.make_model("burg+level", 2, 1, config, level_tau=20.0).tau_s == 20.0
+    with pytest.raises(InputError, match=r"^burg\+level needs the time constant of its level "
+                                         r"\(level_tau=\.\.\.\)$"):
+        harness.make_model("burg+level", 2, 1, config)

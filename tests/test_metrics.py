@@ -310,6 +310,8 @@ def test_outage_metrics_with_zero_model():
     assert out["outage_position_error_m"] == pytest.approx(
         c * 9.80665e-3 * 30.0**2 / 2, rel=1e-12)
     assert out["bias_rms"] == {1.0: c, 10.0: c, 30.0: c}
+    with pytest.raises(InputError, match=r"^the accel position error needs the record's units$"):
+        outage_metrics(ZeroModel(), y, rate, "accel", None, slice(100, 1900), horizon_s=30.0)
 
 
 def test_outage_metrics_with_zero_model_on_noise():

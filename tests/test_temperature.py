@@ -104,6 +104,10 @@ def test_term_standard_errors_are_ols_on_the_selected_terms():
     assert np.all(np.abs(table["coef"].to_numpy()[1:] - [1.2, -0.5]) <= Z * table["se"][1:])
     # the AR(2) weights' asymptotic standard error: sqrt((1 - a2^2) / n)
     np.testing.assert_allclose(table["se"][1:], math.sqrt((1 - 0.25) / n), rtol=0.05)
+    temp = np.linspace(20.0, 30.0, n)
+    with_temp = FOSModel(max_lag=2, exog_lags={"temp_c": 1}).fit(y, {"temp_c": temp})
+    with pytest.raises(InputError, match=r"^the model reads temp_c; pass them in exog$"):
+        term_standard_errors(with_temp, y)
 
 
 def _short_chamber(seed, dependent):

@@ -391,7 +391,7 @@ def outage_metrics(
     position = None
     if sensor is not None:
         if units is None:
-            raise InputError(f"the position error of a {sensor} needs its units")
+            raise InputError(f"the {sensor} position error needs the record's units")
         position = integrated_position_error(errors, rate, sensor, units, g)
     if residual is None:
         residual = (y - np.asarray(model.predict(y), dtype=float))[start:stop]
