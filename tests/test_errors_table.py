@@ -79,6 +79,16 @@ def _three_d_npy(tmp):
     return ["fit", str(tmp / "rec.npy"), "--column", "c0", "--out", str(tmp / "model.json")]
 
 
+def _cut(path):
+    """``path`` cut to its first 20 kB, as a copy that stopped."""
+    path.write_bytes(path.read_bytes()[:20_000])
+    return path
+
+
+def _bag_fit(tmp, path, *extra):
+    return ["fit", str(path), "--column", "gx", *extra, "--out", str(tmp / "m.json")]
+
+
 def _bomb(tmp):
     """A record of one repeated line: a 70 kB file that expands to 70 MB."""
     data = gzip.compress(b"gx\n" + b"0\n" * 35_000_000, 9)
@@ -142,6 +152,7 @@ BUILDERS = {
     "damaged compressed file": _truncated_gzip,
     "damaged `.npy` or Parquet file": lambda tmp: _fit(tmp, b"not numpy", name="rec.npy"),
     "`.npy` array of 3 or more dimensions": _three_d_npy,
+    "`--topic` for a file without topics": lambda tmp: _fit(tmp, _record(), "--topic", "/imu0"),
     "bad `--scale`": lambda tmp: _fit(tmp, _record(), "--scale", "gx=x"),
     "`--scale` of a missing column": lambda tmp: _fit(tmp, _record(), "--scale", "g_x=2"),
     "bad `--rate` or other option value": lambda tmp: _fit(tmp, _record(), "--rate", "-5"),
@@ -196,6 +207,17 @@ FILE_BUILDERS = {
     "outliers dropped without a time column":
         ("spiky_csv", lambda tmp, write: ["fit", str(write(with_time=False)[0]), "--column", "a",
                                           "--outliers", "drop", "--out", str(tmp / "m.json")]),
+    "several IMU topics without `--topic`":
+        ("imu_bag", lambda tmp, write: _bag_fit(tmp, write("two", imu={"/imu0": 400,
+                                                                      "/imu1": 400})[0])),
+    "`--topic` the log lacks":
+        ("imu_bag", lambda tmp, write: _bag_fit(tmp, write("imu.bag", "ros1")[0], "--topic",
+                                                "/imu2")),
+    "`--topic` of another message type":
+        ("imu_bag", lambda tmp, write: _bag_fit(tmp, write("imu", "mcap", temperature={
+            "/temp": 5})[0], "--topic", "/temp")),
+    "damaged ROS bag or ULog file":
+        ("imu_bag", lambda tmp, write: _bag_fit(tmp, _cut(write("imu.bag", "ros1")[0]))),
 }
 
 
