@@ -18,6 +18,7 @@ Layout of the report directory::
 from __future__ import annotations
 
 import json
+import textwrap
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
@@ -25,7 +26,7 @@ import pandas as pd
 
 from ..io.model_file import write_model
 from ..io.output import write_tables, write_text
-from ..loop.loop_report import write_loop_report
+from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
 from ..models.summary import markdown_table
 from ..noise.imu_noise import write_imu_noise
 from ..study.report import write_study
@@ -170,3 +171,30 @@ def _loop_warnings(result: ImuResult) -> list[str]:
                        f"worse ({', '.join(worse)}): they do not hold up, and the model "
                        f"written for it is the loop's starting model.")
     return [*out, ""] if out else []
+
+
+def console_summary(result: ImuResult) -> str:
+    """Summarise the report for a console, in lines of at most 100 characters.
+
+    A line per axis: its noise terms, the 30 s outage error of the best FOS and the best
+    baseline, and the loop's effects with the error before and after them (the report has
+    the rest); then a sentence for each axis whose effects did not hold up.
+    """
+    noise = result.noise.table().set_index("Column")
+    study, loop = result.study_table(), result.loop_table()
+    frame = pd.DataFrame({
+        "axis": study["axis"],
+        "N": [noise.loc[c, "N fitted"] for c in study["axis"]],
+        "B": [noise.loc[c, "B fitted"] for c in study["axis"]],
+        "K": [noise.loc[c, "K fitted"] for c in study["axis"]],
+        "FOS (m)": study["FOS outage error (m, 30 s)"].map("{:.3g}".format),
+        "base (m)": study["baseline outage error (m, 30 s)"].map("{:.3g}".format),
+        "kept": loop["effects kept"],
+        "loop (m)": [f"{b:.3g} -> {a:.3g}" for b, a in
+                     zip(loop["outage error before (m)"], loop["outage error after (m)"])],
+    })
+    lines = ["Noise terms (Allan), 30 s outage position error of the best FOS and baseline "
+             "(study),", "effects kept and outage error before -> after (loop), prediction "
+             "segment:", frame.to_string(index=False)]
+    lines += [textwrap.fill(line, CONSOLE_WIDTH) for line in _loop_warnings(result)[:-1]]
+    return "\n".join(lines)

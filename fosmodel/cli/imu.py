@@ -1,0 +1,123 @@
+"""The ``imu`` command: the six-axis workflow of :mod:`fosmodel.workflows` on one record.
+
+Every axis of an IMU record goes through the Allan analysis, the model-order study and the
+residual loop, and one report holds them all.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from pathlib import Path
+
+from ..core.exceptions import InputError
+from ..io.output import (
+    refuse_overwrite,
+    report_directory,
+    writable_directory,
+    writable_file,
+    write_text,
+)
+from ..io.split import SplitSpec
+from ..noise.axes import UnitsSpec, infer_axis
+from ..study.harness import METHODS
+from .arguments import (
+    RECORD_HELP,
+    SPLIT_HELP,
+    UNITS_HELP,
+    add_loader_options,
+    int_list,
+    name_list,
+    positive_float,
+    positive_int,
+)
+from .commands import _axes, _load
+from .parsing import parsed
+
+#: Names a temperature column goes by (a ROS bag's or a ULog's reader names it temperature).
+_TEMPERATURE = re.compile(r"^(die_?)?temp(erature)?(_?(c|degc|deg_c))?$", re.IGNORECASE)
+
+
+def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """Add the ``imu`` command's arguments to ``parser`` and return it."""
+    parser.add_argument("file", help=RECORD_HELP)
+    parser.add_argument("--columns", type=name_list, metavar="COL[:SENSOR:UNITS],...",
+                        help="the axes (default: every column whose name or file tells a gyro "
+                             "or an accelerometer, e.g. gx..az, gx_dps, acc_y_mps2)")
+    add_loader_options(parser, contiguous="the six-axis workflow")
+    parser.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS,...",
+                        help=UNITS_HELP + " (default: from the names, or the file's)")
+    parser.add_argument("--sensor", choices=("accel", "gyro"), help=argparse.SUPPRESS)
+    parser.add_argument("--temperature", metavar="COL",
+                        help="temperature column the loop may use (default: a column named "
+                             "temperature, temp or temp_c, if any)")
+    parser.add_argument("--orders", type=int_list, default="1-10",
+                        help="model orders of the study, e.g. 1-10 or 1,2,5")
+    parser.add_argument("--degrees", type=int_list, default="1,2",
+                        help="FOS cross-product degrees of the study")
+    parser.add_argument("--methods", type=name_list, default=",".join(METHODS),
+                        help="comma-separated among " + ",".join(METHODS))
+    parser.add_argument("--protocol", choices=("paper", "fair", "both"), default="fair",
+                        help="the study's protocol (paper: baselines on denoised data)")
+    parser.add_argument("--split", type=parsed(SplitSpec.parse), default="180s,180s",
+                        metavar="TRAIN,EVALUATE", help="the study's segments: " + SPLIT_HELP)
+    parser.add_argument("--loop-split", type=parsed(SplitSpec.parse), default="50%,20%",
+                        metavar="TRAIN,EVALUATE", help="the loop's segments: " + SPLIT_HELP)
+    parser.add_argument("--horizon", type=positive_float, default="30",
+                        help="outage horizon in seconds")
+    parser.add_argument("--min-tau", type=positive_float,
+                        help="shortest averaging time of the Allan fits, in s (default: found "
+                             "per axis)")
+    parser.add_argument("--jobs", type=positive_int, default=2,
+                        help="studies and loops run at once, in worker processes")
+    parser.add_argument("--title", help="title of the report")
+    parser.add_argument("--out", required=True, help="output directory (created)")
+    parser.add_argument("--json", help="also write the report's tables and the noise "
+                                       "parameters as JSON")
+    return parser
+
+
+def imu(args: argparse.Namespace) -> int:
+    """Run the six-axis workflow on ``args.file`` and publish its report in ``args.out``."""
+    from ..workflows.imu import ImuConfig, run_imu
+    from ..workflows.imu_report import console_summary, write_imu_report
+
+    json_path = writable_file(args.json) if args.json else None
+    out = writable_directory(args.out)
+    refuse_overwrite({"--json": json_path}, {"the record": args.file})
+    wanted = None if args.columns is None else [s.partition(":")[0] for s in args.columns]
+    if wanted is not None and args.temperature:
+        wanted.append(args.temperature)
+    rec = _load(args, columns=wanted)
+    temperature = args.temperature or next((c for c in rec.names if _TEMPERATURE.match(c)), None)
+    specs = args.columns or [c for c in rec.names if c != temperature and (
+        infer_axis(c)[0] or c in rec.units or (args.units and c in args.units.columns))]
+    if not specs:
+        raise InputError(f"{rec.source}: no column tells a gyro or an accelerometer by its name "
+                         f"(columns: {', '.join(rec.names)}); name them with --columns and "
+                         "give their units with --units")
+    axes = _axes(args, specs, rec)
+    for axis in axes:
+        print(f"fosmodel: {axis.describe()}", file=sys.stderr)
+    rate = rec.require_rate()
+    train_s, evaluate_s = args.split.seconds(rec.n_samples, rate)
+    config = ImuConfig(orders=args.orders, degrees=args.degrees, methods=args.methods,
+                       protocols=("paper", "fair") if args.protocol == "both"
+                       else (args.protocol,), train_s=train_s, evaluate_s=evaluate_s,
+                       horizon_s=args.horizon, loop_split=args.loop_split.fractions(
+                           rec.n_samples, rate), min_tau=args.min_tau, n_jobs=args.jobs)
+    aux = {temperature: rec.column(temperature)} if temperature else None
+    result = run_imu({a.column: rec.column(a.column) for a in axes}, axes, rate, rec.source,
+                     aux=aux, config=config,
+                     progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,
+                                                 flush=True))
+    with report_directory(out, [args.file]) as tmp:
+        write_imu_report(result, tmp, args.title or Path(args.file).name)
+    print(console_summary(result))
+    if json_path:
+        write_text(json_path, json.dumps(result.to_dict(), indent=1) + "\n")
+    print(f"six-axis report of {len(axes)} axes written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else ""))
+    return 0
