@@ -21,8 +21,9 @@ from .parser import build_parser
 __all__ = ["build_parser", "main"]
 
 
-def _one_line_warning(message, category, filename, lineno, line=None) -> str:
-    """A warning as the command line shows it: one line, like its notes and errors."""
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, line: str | None = None) -> str:
+    """Format a warning as the command line shows it: one line, like its notes and errors."""
     return f"fosmodel: warning: {' '.join(str(message).split())}\n"
 
 

@@ -37,7 +37,7 @@ from ..noise.axes import SENSORS, Axis, resolve_axes
 
 def _load(args: argparse.Namespace, path: str | None = None,
           columns: list[str] | None = None) -> Record:
-    """The record of ``path`` (default ``args.file``) with the loader options.
+    """Load the record of ``path`` (default ``args.file``) with the loader options.
 
     Only ``columns`` (default: all) are read and checked.  Its notes go to
     stderr, after the file's name when ``path`` is given.
@@ -53,8 +53,11 @@ def _load(args: argparse.Namespace, path: str | None = None,
 
 def _axes(args: argparse.Namespace, columns: list[str], rec: Record,
           optional: bool = False) -> list[Axis]:
-    """Each column's sensor and units from --units, the file, --sensor, --gyro-units/--accel-units
-    or its name (:func:`~fosmodel.noise.axes.resolve_axes`); none if ``optional`` and none is."""
+    """Resolve each column's sensor and units (:func:`~fosmodel.noise.axes.resolve_axes`).
+
+    From --units, the file, --sensor, --gyro-units/--accel-units or its name; none if
+    ``optional`` and none is given.
+    """
     per_sensor = {s: units for s in SENSORS if (units := vars(args).get(f"{s}_units"))}
     if optional and not (args.sensor or args.units or per_sensor or set(columns) & set(rec.units)):
         return []
