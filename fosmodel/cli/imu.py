@@ -87,10 +87,7 @@ def imu(args: argparse.Namespace) -> int:
     json_path = writable_file(args.json) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
-    wanted = None if args.columns is None else [s.partition(":")[0] for s in args.columns]
-    if wanted is not None and args.temperature:
-        wanted.append(args.temperature)
-    rec = _load(args, columns=wanted)
+    rec = _load(args)  # every column: an IMU record has few, and its temperature is found
     temperature = args.temperature or next((c for c in rec.names if _TEMPERATURE.match(c)), None)
     specs = args.columns or [c for c in rec.names if c != temperature and (
         infer_axis(c)[0] or c in rec.units or (args.units and c in args.units.columns))]

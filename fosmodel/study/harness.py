@@ -323,6 +323,24 @@ def _unpickle_plan(config: StudyConfig, split: Split,
     return StudyPlan(config, split, copies, tasks, level_taus)
 
 
+def study_split(n: int, config: StudyConfig) -> Split:
+    """Split a record of ``n`` samples into the study's three segments.
+
+    Training and evaluation take the config's durations; the prediction segment, the rest,
+    must hold an outage horizon and two windows of the longest bias time.
+
+    Raises
+    ------
+    InputError
+        If the record is too short for the split and the outage windows of the prediction.
+    """
+    horizon, tau = round(config.horizon_s * config.rate), max(config.taus)
+    return Split.by_duration(
+        n, config.rate, config.train_s, config.evaluate_s,
+        min_predict=max(horizon + 1, 2 * round(tau * config.rate)),
+        why=f" (a {config.horizon_s:g} s outage horizon and two {tau:g} s bias windows)")
+
+
 def plan_study(y: ArrayLike, config: StudyConfig) -> StudyPlan:
     """Check and split the record ``y``, denoise it as the protocols need, list the fits.
 
@@ -332,11 +350,7 @@ def plan_study(y: ArrayLike, config: StudyConfig) -> StudyPlan:
         If the record is not a finite signal or too short for the split.
     """
     y = as_signal(y, "the record")
-    horizon, tau = round(config.horizon_s * config.rate), max(config.taus)
-    split = Split.by_duration(
-        len(y), config.rate, config.train_s, config.evaluate_s,
-        min_predict=max(horizon + 1, 2 * round(tau * config.rate)),
-        why=f" (a {config.horizon_s:g} s outage horizon and two {tau:g} s bias windows)")
+    split = study_split(len(y), config)
     level_taus = levels_for(y[split.train], config.rate) if config.levels else ()
     tasks = tuple(dict.fromkeys(task for _, task in _row_tasks(config, level_taus)))
     signals = {d: _signals(y, split, d, config.rate)

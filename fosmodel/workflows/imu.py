@@ -27,7 +27,7 @@ from ..filter.statespace import StateSpace
 from ..loop.closeloop import LoopConfig, LoopResult, close_loop
 from ..noise.axes import Axis
 from ..noise.imu_noise import ImuNoise, imu_noise
-from ..study.harness import METHODS, StudyConfig, StudyResult
+from ..study.harness import METHODS, StudyConfig, StudyResult, study_split
 from ..study.runner import run_study
 
 Progress = Callable[[str], None]
@@ -113,14 +113,14 @@ class ImuResult:
 
         Both are chosen on the evaluation segment; their errors are on the prediction segment.
         """
-        return pd.DataFrame([_study_row(a) for a in self.axes])
+        return pd.DataFrame([study_row(a.axis, a.study) for a in self.axes])
 
     def loop_table(self) -> pd.DataFrame:
         """Tabulate per axis the effects the loop kept and the errors before and after them.
 
         The errors are on the prediction segment.
         """
-        return pd.DataFrame([_loop_row(a) for a in self.axes])
+        return pd.DataFrame([loop_row(a.axis, a.loop) for a in self.axes])
 
     def timing_table(self) -> pd.DataFrame:
         """Run time of each step per axis (s); the Allan fits ran on all axes at once."""
@@ -181,12 +181,16 @@ def run_imu(
     Raises
     ------
     InputError
-        No axis, an axis missing from ``columns``, or columns of unequal length.
+        No axis, an axis missing from ``columns``, columns of unequal length, or a record
+        too short for the study's split (before any work).
     """
     config = config or ImuConfig()
     say = progress or (lambda line: None)
     _check(columns, axes, aux or {})
     n = len(columns[axes[0].column])
+    for axis in axes:  # refuse a bad split or unit before any work
+        study_split(n, config.study_config(rate, axis))
+        config.loop_config(rate, axis)
     start = time.perf_counter()
     noise = imu_noise(columns, axes, rate, source, min_tau=config.min_tau)
     allan_s = time.perf_counter() - start
@@ -260,11 +264,12 @@ def _best(rows: pd.DataFrame, fos: bool) -> pd.Series:
     return pick.loc[pick["evaluate_mse"].idxmin()]
 
 
-def _study_row(a: AxisResult) -> dict[str, Any]:
-    rows = a.study.rows[a.study.rows["protocol"] == "fair"] if "fair" in \
-        a.study.config.protocols else a.study.rows
+def study_row(axis: Axis, study: StudyResult) -> dict[str, Any]:
+    """Tabulate the best FOS and the best baseline of an axis's study (a row of the tables)."""
+    rows = study.rows[study.rows["protocol"] == "fair"] if "fair" in \
+        study.config.protocols else study.rows
     fos, base = _best(rows, True), _best(rows, False)
-    return {"axis": a.axis.column, "units": a.axis.units,
+    return {"axis": axis.column, "units": axis.units,
             "FOS": f"{fos['label']} L={fos['order']}",
             "FOS outage error (m, 30 s)": fos["outage_position_error_m"],
             "FOS bias RMS 30 s": fos["bias_rms_30s"],
@@ -275,10 +280,10 @@ def _study_row(a: AxisResult) -> dict[str, Any]:
             / base["outage_position_error_m"]}
 
 
-def _loop_row(a: AxisResult) -> dict[str, Any]:
-    loop = a.loop
+def loop_row(axis: Axis, loop: LoopResult) -> dict[str, Any]:
+    """Tabulate the effects an axis's loop kept and its errors before and after them."""
     before, after = loop.before, loop.after
-    return {"axis": a.axis.column, "units": a.axis.units,
+    return {"axis": axis.column, "units": axis.units,
             "effects kept": len(loop.steps),
             "kept": "; ".join(s.effect.describe() for s in loop.steps) or "none",
             "outage error before (m)": before["outage_position_error_m"],

@@ -1,0 +1,107 @@
+"""``fosmodel imu``: the six-axis workflow from the command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from fosmodel.cli import main
+from fosmodel.noise.axes import resolve_axes
+from fosmodel.workflows.imu import ImuConfig, run_imu
+
+FAST = ["--orders", "1-2", "--methods", "fos,burg", "--jobs", "1"]
+
+
+@pytest.fixture(scope="module")
+def imu_csv(tmp_path_factory):
+    """Six axes of the static_imu scenario (300 s at 100 Hz) and a die temperature."""
+    from data_synth import make_scenario
+
+    rec = make_scenario("static_imu", duration=300.0, seed=5)
+    frame = pd.DataFrame({"time": np.arange(30_000) / 100.0, **rec.columns})
+    frame["temp_c"] = 30 + 0.001 * np.arange(30_000) / 100.0
+    path = tmp_path_factory.mktemp("imu") / "imu.csv"
+    frame.to_csv(path, index=False)
+    return path, rec
+
+
+def _run(args, capsys):
+    code = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys):
+    path, rec = imu_csv
+    out, js = tmp_path / "report", tmp_path / "imu.json"
+    code, stdout, err = _run(["imu", path, "--columns", "gx_dps,ax_mps2", "--split", "60s,60s",
+                              *FAST, "--out", out, "--json", js], capsys)
+    assert code == 0, err
+    *table, written = stdout.splitlines()  # the last line names the output directory
+    assert all(len(line) <= 100 for line in table)
+    assert written == f"six-axis report of 2 axes written to {out.resolve()}/ and {js}"
+    assert "fosmodel: gx_dps: gyro in deg/s (from the name)" in err
+    assert "4/4 tasks done" in err
+    page = (out / "report.md").read_text()
+    assert "auxiliary channels of the loop: temp_c" in page
+    axes = resolve_axes(["gx_dps", "ax_mps2"])
+    alone = run_imu({a.column: rec.columns[a.column] for a in axes}, axes, 100.0,
+                    aux={"temp_c": pd.read_csv(path)["temp_c"].to_numpy()},
+                    config=ImuConfig(orders=(1, 2), methods=("fos", "burg"), train_s=60.0,
+                                     evaluate_s=60.0, n_jobs=1))
+    data = json.loads(js.read_text())
+    assert data["aux"] == ["temp_c"]
+    pd.testing.assert_frame_equal(pd.DataFrame(data["study"]), alone.study_table(),
+                                  check_dtype=False)
+    pd.testing.assert_frame_equal(pd.DataFrame(data["loop"]), alone.loop_table(),
+                                  check_dtype=False)
+    for column in ("gx_dps", "ax_mps2"):
+        assert (out / "models" / f"{column}.json").is_file()
+        assert (out / "study" / column / "report.md").is_file()
+
+
+def test_a_ros2_bag_is_read_with_its_units(imu_bag, tmp_path, capsys):
+    bag, _ = imu_bag("day", "mcap", imu={"/imu0": 12_000}, rate=50.0)  # 240 s
+    out = tmp_path / "bag-report"
+    code, stdout, err = _run(["imu", bag, "--split", "60s,60s", *FAST, "--out", out], capsys)
+    assert code == 0, err
+    for column, units in (("gx", "rad/s"), ("ay", "m/s^2")):
+        assert f"fosmodel: {column}: " in err and f"in {units} (units from the file)" in err
+    table = pd.read_csv(out / "noise.csv")
+    assert list(table["Column"]) == ["gx", "gy", "gz", "ax", "ay", "az"]
+
+
+def test_refusals_take_one_line_and_write_nothing(imu_csv, tmp_path, capsys):
+    path, _ = imu_csv
+    out = tmp_path / "never"
+    code, _, err = _run(["imu", path, *FAST, "--out", out], capsys)
+    assert code == 2 and not out.exists()
+    assert err.strip().splitlines()[-1] == (
+        "fosmodel: error: the record has 30000 samples (300 s at 100 Hz); the split 180 s / "
+        "180 s leaves 0 samples to predict, 6000 are needed (a 30 s outage horizon and two "
+        "30 s bias windows)")
+    other = tmp_path / "other.csv"
+    pd.DataFrame({"time": np.arange(100) / 10, "foo": np.ones(100), "bar": np.zeros(100)}
+                 ).to_csv(other, index=False)
+    code, _, err = _run(["imu", other, "--out", out], capsys)
+    assert code == 2 and not out.exists()
+    assert err.strip().splitlines()[-1] == (
+        f"fosmodel: error: {other}: no column tells a gyro or an accelerometer by its name "
+        "(columns: foo, bar); name them with --columns and give their units with --units")
+    with pytest.raises(SystemExit) as stop:
+        main(["imu", str(path), "--segments", "--out", str(out)])
+    assert stop.value.code == 2 and not out.exists()
+    assert "the six-axis workflow needs a contiguous record" in capsys.readouterr().err
+
+
+def test_the_help_lists_the_options_with_their_defaults(capsys):
+    with pytest.raises(SystemExit):
+        main(["imu", "--help"])
+    text = " ".join(capsys.readouterr().out.split())  # as one line, however argparse wraps
+    for option, default in (("--orders", "1-10"), ("--protocol", "fair"),
+                            ("--split", "180s,180s"), ("--loop-split", "50%,20%"),
+                            ("--jobs", "2")):
+        assert option in text and f"(default: {default})" in text, option
