@@ -75,6 +75,46 @@ def test_blocked_weighted_gram_matches_reference(spec, monkeypatch):
     assert calls  # the blocked path did run
 
 
+@pytest.mark.parametrize("spec", SPECS, ids=lambda s: f"L{s.max_lag}CP{s.degree}")
+@pytest.mark.parametrize("table_degree", [0, 3])
+def test_window_summed_in_blocks_matches_reference(spec, table_degree, monkeypatch):
+    # windows over _BLOCKED_SAMPLES are summed in blocks of _BLOCK samples: force it on a
+    # short one, with blocks shorter than the lags so that every product straddles block edges
+    monkeypatch.setattr(correlations, "_BLOCKED_SAMPLES", 0)
+    monkeypatch.setattr(correlations, "_BLOCK", 7)
+    signals = _signals(150, 4)
+    terms = [t for t in generate_terms(spec) if not t.is_constant]
+    n0 = spec.lag_window
+    fast = LagCorrelations(terms, signals, n0, table_degree=table_degree)
+    assert len(fast._blocks()) == -(-(150 - n0) // 7)
+    ref = DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
+    scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
+    _assert_close(fast.y_mean, ref.y_mean, scale)
+    _assert_close(fast.y_mean_sq, ref.y_mean_sq, scale)
+    _assert_close(fast.means, ref.means, scale)
+    _assert_close(fast.target, ref.target, scale)
+    _assert_close(fast.diag, ref.diag, scale)
+    for j in range(len(terms)):
+        _assert_close(fast.column(j), ref.column(j), scale)
+
+
+def test_blocked_sums_select_the_same_terms_as_one_pass(monkeypatch):
+    from fosmodel.models.model import FOSModel
+
+    rng = np.random.default_rng(5)
+    y = np.zeros(3000)
+    e = rng.standard_normal(3000)
+    for n in range(2, 3000):
+        y[n] = 0.5 * y[n - 1] - 0.2 * y[n - 2] + 0.1 * y[n - 1] * y[n - 2] + e[n]
+    kwargs = dict(max_lag=6, degree=2, max_terms=8, stop="max_terms")
+    one_pass = FOSModel(**kwargs).fit(y)
+    monkeypatch.setattr(correlations, "_BLOCKED_SAMPLES", 0)
+    monkeypatch.setattr(correlations, "_BLOCK", 64)
+    blocked = FOSModel(**kwargs).fit(y)
+    assert blocked.terms_ == one_pass.terms_
+    np.testing.assert_allclose(blocked.coef_, one_pass.coef_, rtol=1e-9)
+
+
 def test_window_shorter_than_signal_start_uses_only_window_samples():
     # changing samples before the window start only matters through the lags
     spec = CandidateSpec(3, 2)

@@ -38,6 +38,12 @@ from .shapes import Batch, NewShapes, direct_groups, layout, plan_batch
 
 _GEMM_SAMPLES = 200_000  # from this window length, weighted sums of pairs go through BLAS
 _CHUNK = 4096  # samples per block of those sums: the block's factors stay in cache
+# Windows longer than this are summed in blocks of _BLOCK samples: a block's products and
+# correlations stay in the cache (one pass over a whole record is bound by memory traffic,
+# ~5x slower at 1e7 samples) and the work arrays hold a block, not the record.  Shorter
+# windows keep their single pass, so their sums (and the fits on them) stay bit-identical.
+_BLOCKED_SAMPLES = 2**21
+_BLOCK = 2**16
 _SCRATCH = threading.local()
 
 
@@ -151,8 +157,7 @@ class LagCorrelations:
             out[direct] = self._direct_sums(ch[direct], lag[direct], None)
         else:
             w = len(extra[0])
-            weight = self._product(*extra)
-            out[direct] = self._direct_sums(ch[direct, :-w], lag[direct, :-w], weight)
+            out[direct] = self._direct_sums(ch[direct, :-w], lag[direct, :-w], extra)
         return out / self.n_samples
 
     def _factor(self, ch: int, rel: int, lo: int, hi: int) -> np.ndarray:
@@ -160,17 +165,33 @@ class LagCorrelations:
         return self._signals[ch][lo - rel : hi - rel]
 
     def _power(self, ch: int | None, rel: int, k: int, lo: int, hi: int) -> np.ndarray:
-        """u_ch(t - rel)^k (k = 1 or 2; squares are computed once) for t = lo..hi-1.
+        """u_ch(t - rel)^k (k = 1 or 2) for t = lo..hi-1.
 
-        ``ch`` None gives ones (the empty product).
+        ``ch`` None gives ones (the empty product).  The squares of a whole
+        signal are computed once; on a window summed in blocks, a block's each
+        time (they are cheap, and a record-long array per channel is what
+        blocks avoid).
         """
         if ch is None:
             return np.ones(hi - lo)
         if k == 1:
             return self._factor(ch, rel, lo, hi)
+        if self.n_samples > _BLOCKED_SAMPLES:
+            return np.square(self._factor(ch, rel, lo, hi))
         if ch not in self._squares:
             self._squares[ch] = np.square(self._signals[ch])
         return self._squares[ch][lo - rel : hi - rel]
+
+    def _blocks(self) -> list[tuple[int, int]]:
+        """Return the ranges ``lo..hi-1`` of the window over which sums are accumulated.
+
+        The whole window when it is at most ``_BLOCKED_SAMPLES`` long, else
+        blocks of ``_BLOCK`` samples.
+        """
+        n0, n = self._n0, self._n
+        if n - n0 <= _BLOCKED_SAMPLES:
+            return [(n0, n)]
+        return [(lo, min(lo + _BLOCK, n)) for lo in range(n0, n, _BLOCK)]
 
     def _edges(self, lo: int) -> np.ndarray:
         """Return E[ch, i, rel] = u_ch(lo + i - rel) for i < N0, rel <= N0.
@@ -191,7 +212,7 @@ class LagCorrelations:
 
         Partial products start from ``root`` and are shared depth-first;
         ``None`` stands for the empty product.  A yielded product is only
-        valid until the next one (buffers are reused); always ``lo = N0``.
+        valid until the next one (buffers are reused); ``lo >= N0``.
         """
         stack: list[tuple[tuple, np.ndarray | None]] = [((), root)]
         for prefix in sorted(set(prefixes)):
@@ -209,12 +230,13 @@ class LagCorrelations:
 
     def _add_shapes(self, batch: Batch, new: NewShapes) -> None:
         """Tabulate the batch's new shapes: their sum over the window and near each end."""
-        n, n0 = self._n, self._n0
-        sums = np.empty(len(new.ch))
-        # the product of each group's leading factors over the window, shared depth-first
-        for prefix, prefix_product in self._walk(new.groups, n0, n):
-            for (ch, k), (rows, rels) in new.groups[prefix].items():
-                sums[rows] = self._lagged_sums(prefix_product, ch, k, rels)
+        n0 = self._n0
+        sums = np.zeros(len(new.ch))
+        # the product of each group's leading factors over a block, shared depth-first
+        for lo, hi in self._blocks():
+            for prefix, prefix_product in self._walk(new.groups, lo, hi):
+                for (ch, k), (rows, rels) in new.groups[prefix].items():
+                    sums[rows] += self._lagged_sums(prefix_product, ch, k, rels, lo, hi)
         # near the ends: products of every shape at once, then cumulative sums
         head = np.zeros((len(sums), n0 + 1))  # head[a] = sum_{t=a}^{N0-1}
         head[:, :n0] = np.cumsum(
@@ -227,53 +249,54 @@ class LagCorrelations:
         self._table_keys, self._table_slots = batch.keys, batch.slots
 
     def _lagged_sums(
-        self, weight: np.ndarray | None, ch: int, k: int, rels: np.ndarray,
+        self, weight: np.ndarray | None, ch: int, k: int, rels: np.ndarray, lo: int, hi: int,
     ) -> np.ndarray:
-        """Return ``sum_t weight(t) u_ch(t - rel)^k`` over the window for each ``rel``.
+        """Return ``sum_t weight(t) u_ch(t - rel)^k`` over ``t = lo..hi-1`` for each ``rel``.
 
         ``rel`` ascending; ``weight`` None: ones.  ``weight`` is the product of the
-        moment's other factors.
+        moment's other factors over those samples.
 
         Several lags of one signal are one correlation (a dot product per lag
         in C) when they fill at least half of their range.
         """
-        n0, n = self._n0, self._n
         src = None if ch < 0 else ch
-        lo, hi = rels[0].item(), rels[-1].item()
+        first, last = rels[0].item(), rels[-1].item()
         if weight is None and k == 2 and src is not None:  # sums of squares, without forming them
-            return np.array([f @ f for f in (self._factor(src, r, n0, n) for r in rels.tolist())])
-        if weight is None or len(rels) == 1 or hi - lo + 1 > 2 * len(rels):
+            return np.array([f @ f for f in (self._factor(src, r, lo, hi) for r in rels.tolist())])
+        if weight is None or len(rels) == 1 or last - first + 1 > 2 * len(rels):
             sums = []
             for r in rels.tolist():
-                f = self._power(src, r, k, n0, n)
+                f = self._power(src, r, k, lo, hi)
                 sums.append(f.sum() if weight is None else weight @ f)
             return np.array(sums)
-        # u(t - hi)^k for t = n0 .. n - 1 + hi - lo: correlation lag j is rel = hi - j
-        series = self._power(src, hi, k, n0, n + hi - lo)
-        return np.correlate(series, weight, "valid")[hi - rels]
+        # u(t - last)^k for t = lo .. hi - 1 + last - first: correlation lag j is rel = last - j
+        series = self._power(src, last, k, lo, hi + last - first)
+        return np.correlate(series, weight, "valid")[last - rels]
 
-    def _product(self, ch: np.ndarray, lag: np.ndarray) -> np.ndarray:
-        """Return the product of the factors (channel, lag) over the window, a new array."""
-        out = np.ones(self.n_samples)
+    def _product(self, ch: np.ndarray, lag: np.ndarray, lo: int, hi: int) -> np.ndarray:
+        """Return the product of the factors (channel, lag) over ``t = lo..hi-1``, a new array."""
+        out = np.ones(hi - lo)
         for c, k in zip(ch.tolist(), lag.tolist()):
             if c >= 0:
-                out *= self._factor(c, k, self._n0, self._n)
+                out *= self._factor(c, k, lo, hi)
         return out
 
     def _direct_sums(self, ch: np.ndarray, lag: np.ndarray,
-                     weight: np.ndarray | None) -> np.ndarray:
-        """Sum each row's product times ``weight`` over the window.
+                     weight: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+        """Sum each row's product times the product of the factors ``weight`` over the window.
 
         Partial products are shared, and the lags of a row's last factor are summed as one
-        correlation where they are dense.
+        correlation where they are dense.  ``weight`` None: ones.
         """
         if weight is not None and self._use_gram(ch, lag):
             return self._weighted_gram_sums(ch, lag, weight)
         groups = direct_groups(ch, lag)
-        out = np.empty(len(ch))
-        for prefix, prefix_product in self._walk(groups, self._n0, self._n, weight):
-            for (c, k), (rows, lags) in groups[prefix].items():
-                out[rows] = self._lagged_sums(prefix_product, c, k, lags)
+        out = np.zeros(len(ch))
+        for lo, hi in self._blocks():
+            root = None if weight is None else self._product(*weight, lo, hi)
+            for prefix, prefix_product in self._walk(groups, lo, hi, root):
+                for (c, k), (rows, lags) in groups[prefix].items():
+                    out[rows] += self._lagged_sums(prefix_product, c, k, lags, lo, hi)
         return out
 
     def _use_gram(self, ch: np.ndarray, lag: np.ndarray) -> bool:
@@ -292,11 +315,12 @@ class LagCorrelations:
         return 4 * len(ch) >= n_factors**2
 
     def _weighted_gram_sums(self, ch: np.ndarray, lag: np.ndarray,
-                            weight: np.ndarray) -> np.ndarray:
+                            weight: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
         """``sum_t w(t) u_a(t - l_a) u_b(t - l_b)`` over the window for each row's two factors.
 
-        The entries of the weighted Gram matrix ``X' diag(w) X`` of the rows'
-        distinct factors, accumulated over blocks of ``_CHUNK`` samples.
+        ``w`` is the product of the factors ``weight``.  The entries of the
+        weighted Gram matrix ``X' diag(w) X`` of the rows' distinct factors,
+        accumulated over blocks of ``_CHUNK`` samples.
         """
         pairs = np.stack([ch[:, :2], lag[:, :2]], axis=-1)  # (rows, 2 factors, (ch, lag))
         factors, index = np.unique(pairs.reshape(-1, 2), axis=0, return_inverse=True)
@@ -307,7 +331,7 @@ class LagCorrelations:
             for lo in range(n0, n, _CHUNK):
                 hi = min(lo + _CHUNK, n)
                 x = np.stack([self._factor(c, k, lo, hi) for c, k in factors.tolist()])
-                gram += (x * weight[lo - n0 : hi - n0]) @ x.T
+                gram += (x * self._product(*weight, lo, hi)) @ x.T
         return gram[index[:, 0], index[:, 1]]
 
 
