@@ -11,6 +11,7 @@ import json
 import re
 import sys
 from pathlib import Path
+from typing import Any
 
 from ..core.exceptions import InputError
 from ..io.output import (
@@ -43,6 +44,18 @@ _TEMPERATURE = re.compile(r"^(die_?)?temp(erature)?(_?(c|degc|deg_c))?$", re.IGN
 def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Add the ``imu`` command's arguments to ``parser`` and return it."""
     parser.add_argument("file", help=RECORD_HELP)
+    add_workflow_options(parser)
+    parser.add_argument("--jobs", type=positive_int, default=2,
+                        help="studies and loops run at once, in worker processes")
+    parser.add_argument("--title", help="title of the report")
+    parser.add_argument("--out", required=True, help="output directory (created)")
+    parser.add_argument("--json", help="also write the report's tables and the noise "
+                                       "parameters as JSON")
+    return parser
+
+
+def add_workflow_options(parser: argparse.ArgumentParser) -> None:
+    """Add the options of the six-axis workflow's steps (shared with the ``fleet`` command)."""
     parser.add_argument("--columns", type=name_list, metavar="COL[:SENSOR:UNITS],...",
                         help="the axes (default: every column whose name or file tells a gyro "
                              "or an accelerometer, e.g. gx..az, gx_dps, acc_y_mps2)")
@@ -70,13 +83,13 @@ def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser
     parser.add_argument("--min-tau", type=positive_float,
                         help="shortest averaging time of the Allan fits, in s (default: found "
                              "per axis)")
-    parser.add_argument("--jobs", type=positive_int, default=2,
-                        help="studies and loops run at once, in worker processes")
-    parser.add_argument("--title", help="title of the report")
-    parser.add_argument("--out", required=True, help="output directory (created)")
-    parser.add_argument("--json", help="also write the report's tables and the noise "
-                                       "parameters as JSON")
-    return parser
+
+
+def workflow_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """Return the settings of :class:`~fosmodel.workflows.imu.ImuConfig` the options give."""
+    return dict(orders=args.orders, degrees=args.degrees, methods=args.methods,
+                protocols=("paper", "fair") if args.protocol == "both" else (args.protocol,),
+                horizon_s=args.horizon, min_tau=args.min_tau)
 
 
 def imu(args: argparse.Namespace) -> int:
@@ -100,11 +113,9 @@ def imu(args: argparse.Namespace) -> int:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
     rate = rec.require_rate()
     train_s, evaluate_s = args.split.seconds(rec.n_samples, rate)
-    config = ImuConfig(orders=args.orders, degrees=args.degrees, methods=args.methods,
-                       protocols=("paper", "fair") if args.protocol == "both"
-                       else (args.protocol,), train_s=train_s, evaluate_s=evaluate_s,
-                       horizon_s=args.horizon, loop_split=args.loop_split.fractions(
-                           rec.n_samples, rate), min_tau=args.min_tau, n_jobs=args.jobs)
+    config = ImuConfig(**workflow_settings(args), train_s=train_s, evaluate_s=evaluate_s,
+                       loop_split=args.loop_split.fractions(rec.n_samples, rate),
+                       n_jobs=args.jobs)
     aux = {temperature: rec.column(temperature)} if temperature else None
     result = run_imu({a.column: rec.column(a.column) for a in axes}, axes, rate, rec.source,
                      aux=aux, config=config,

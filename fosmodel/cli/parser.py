@@ -163,6 +163,12 @@ def build_parser() -> argparse.ArgumentParser:
                          "study and residual loop, one report")
     imu.configure_parser(six).set_defaults(func=imu.imu)
 
+    from . import fleet
+
+    many = sub.add_parser("fleet", help="a batch of IMU records through the six-axis workflow, "
+                          "in this process or on Dask; a rerun resumes")
+    fleet.configure_parser(many).set_defaults(func=fleet.fleet)
+
     from data_synth.cli import configure_parser
 
     synth = sub.add_parser("synth", help="write a synthetic record with its ground truth")
