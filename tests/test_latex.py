@@ -187,6 +187,20 @@ def _imu(out: Path) -> list[Path]:
     return sorted(out.rglob("*.tex"))
 
 
+def _workflow(out: Path) -> list[Path]:
+    """The six-axis workflow's own tables (its axes' reports are the kinds above)."""
+    from data_synth import make_scenario
+    from fosmodel.workflows.imu import ImuConfig, run_imu
+    from fosmodel.workflows.imu_report import write_imu_tables
+
+    rec = make_scenario("static_imu", duration=300.0, seed=3)
+    axes = [Axis("gy_dps", "gyro", "deg/s", "given"), Axis("ax_mps2", "accel", "m/s^2", "given")]
+    result = run_imu(rec.columns, axes, rec.rate, "static_imu.csv", config=ImuConfig(
+        orders=(1, 2), methods=("fos", "burg"), train_s=60.0, evaluate_s=60.0, n_jobs=1))
+    write_imu_tables(result, out, TITLE)
+    return sorted(out.glob("*.tex"))
+
+
 def _summary(out: Path) -> list[Path]:
     model = FOSModel(max_lag=3, degree=2, stop="max_terms", max_terms=4).fit(_ar(3000, 6))
     path = out / "summary.tex"
@@ -197,11 +211,12 @@ def _summary(out: Path) -> list[Path]:
 
 WRITERS = {"special": _special_table, "study": lambda out: _studies(out, (0,)),
            "studies": lambda out: _studies(out, (1, 2)), "loop": _loop,
-           "allan": _allan, "imu": _imu, "summary": _summary}
+           "allan": _allan, "imu": _imu, "workflow": _workflow, "summary": _summary}
 EXPECTED = {"special": {"special"}, "study": {"comparison", "study", "best", "level"},
             "studies": {"best", "comparison", "study", "level"},
             "loop": {"effects", "diagnostics"}, "allan": {"allan", "noise"},
-            "imu": {"noise", "noise_si", "allan"}, "summary": {"summary"}}
+            "imu": {"noise", "noise_si", "allan"},
+            "workflow": {"noise", "study", "loop", "timing"}, "summary": {"summary"}}
 
 
 @pytest.fixture(scope="module", params=sorted(WRITERS))

@@ -49,17 +49,8 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
     list of Path
         Every file written.
     """
-    tables = {
-        "noise": (result.noise.table(), f"{title}: Allan noise parameters of every axis"),
-        "study": (result.study_table(), f"{title}: best FOS and best baseline of each axis "
-                  "(chosen on the evaluation segment), errors on the prediction segment"),
-        "loop": (result.loop_table(), f"{title}: the residual loop of each axis, errors on "
-                 "the prediction segment before and after the effects kept"),
-        "timing": (result.timing_table(), f"{title}: run time of each step"),
-    }
-    paths = []
-    for stem, (frame, caption) in tables.items():
-        paths += write_tables(frame, out_dir, stem, caption, report=title)
+    tables = write_imu_tables(result, out_dir, title)
+    paths = [out_dir / f"{stem}.{ext}" for stem in tables for ext in ("md", "csv", "tex")]
     for part in _in_parallel(_parts(result, out_dir, title), result.config.n_jobs):
         paths += part
     models = [_write_model(result, a, _mkdir(out_dir / "models")) for a in result.axes]
@@ -68,6 +59,28 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
     report = out_dir / "report.md"
     write_text(report, _page(result, title, tables, models))
     return [*paths, *(p for p, _ in models), filter_path, report]
+
+
+def write_imu_tables(result: ImuResult, out_dir: Path,
+                     title: str) -> dict[str, tuple[pd.DataFrame, str]]:
+    """Write the report's four tables (noise, study, loop, timing) as Markdown, CSV and LaTeX.
+
+    Returns
+    -------
+    dict
+        Each table's stem to the table and its caption.
+    """
+    tables = {
+        "noise": (result.noise.table(), f"{title}: Allan noise parameters of every axis"),
+        "study": (result.study_table(), f"{title}: best FOS and best baseline of each axis "
+                  "(chosen on the evaluation segment), errors on the prediction segment"),
+        "loop": (result.loop_table(), f"{title}: the residual loop of each axis, errors on "
+                 "the prediction segment before and after the effects kept"),
+        "timing": (result.timing_table(), f"{title}: run time of each step"),
+    }
+    for stem, (frame, caption) in tables.items():
+        write_tables(frame, out_dir, stem, caption, report=title)
+    return tables
 
 
 def _parts(result: ImuResult, out_dir: Path, title: str) -> list[tuple[Callable, tuple]]:
