@@ -17,6 +17,8 @@ from scipy.signal import lfilter, lfiltic
 from ..core.exceptions import InputError, UnstableModelWarning
 from ..core.validation import as_signal
 
+_ROWS = 2**16  # predictions per block of the one-step product
+
 
 def ar_one_step(phi: np.ndarray, mu: float, y: np.ndarray) -> np.ndarray:
     """One-step predictions of ``y`` from its true past, NaN for the first ``len(phi)`` samples."""
@@ -24,9 +26,12 @@ def ar_one_step(phi: np.ndarray, mu: float, y: np.ndarray) -> np.ndarray:
     out = np.full(len(y), np.nan)
     if p == 0:
         out[:] = mu
-    elif len(y) > p:
-        lags = sliding_window_view(y - mu, p)[:-1, ::-1]  # row n-p: y[n-1], ..., y[n-p]
-        out[p:] = mu + lags @ phi
+        return out
+    # in blocks of rows: the product copies the strided lag matrix, p times the record at once
+    for lo in range(p, len(y), _ROWS):
+        hi = min(lo + _ROWS, len(y))
+        lags = sliding_window_view(y[lo - p : hi] - mu, p)[:-1, ::-1]  # row: y[n-1] .. y[n-p]
+        out[lo:hi] = mu + lags @ phi
     return out
 
 

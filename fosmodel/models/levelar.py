@@ -97,7 +97,9 @@ class LocalLevelAR:
     def free_runs(self, y: ArrayLike, starts: Sequence[int], n_steps: int) -> np.ndarray:
         """``simulate(y[:s], n_steps)`` for each ``s`` in ``starts``, all at once."""
         arr = as_signal(y, "y")
-        level = np.r_[self._level(arr), smooth_after(arr, self._gain())]
+        series, gain = self._level(arr), self._gain()
+        # the level after the record from the (cached) series: smooth_after's value, no new pass
+        level = np.r_[series, (1.0 - gain) * series[-1] + gain * arr[-1]]
         states = np.array([self._state(arr, level, int(s)) for s in starts])
         return self._run(states.reshape(len(starts), -1), n_steps)
 
