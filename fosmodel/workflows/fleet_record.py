@@ -1,0 +1,248 @@
+"""A record of a fleet: the task that runs the chosen steps on it and publishes its folder.
+
+:func:`run_record` reads one record, runs the chosen steps of the six-axis workflow on its axes
+(as :func:`fosmodel.workflows.imu.run_imu` runs them with one job), and publishes its folder of
+the store (:mod:`fosmodel.workflows.fleet`) in one rename, with the completion marker inside:
+the record's rows of the summary, the marker (:func:`fingerprint`: the file and the settings;
+each step's time) and, if asked, its reports.  BLAS is limited to one thread in the task, so
+that it gives the same bits in this process and on any worker.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from threadpoolctl import threadpool_limits
+
+from ..core.exceptions import InputError
+from ..io.loader import load_record
+from ..io.output import report_directory
+from ..io.record import Record
+from ..io.split import SplitSpec
+from ..loop.closeloop import LoopResult, close_loop
+from ..loop.loop_report import write_loop_report
+from ..noise.axes import Axis, UnitsSpec, infer_axis, resolve_axes
+from ..noise.imu_noise import ImuNoise, imu_noise, write_imu_noise
+from ..study.harness import StudyResult
+from ..study.report import write_study
+from ..study.runner import run_study
+from .imu import STEPS, AxisResult, ImuConfig, ImuResult, loop_row, study_row
+
+#: The completion marker of a record's folder in the store.
+MARKER = "done.json"
+#: Names a temperature column goes by (a ROS bag's or a ULog's reader names it temperature).
+TEMPERATURE = re.compile(r"^(die_?)?temp(erature)?(_?(c|degc|deg_c))?$", re.IGNORECASE)
+_SUFFIXES = {".gz", ".bz2", ".xz", ".zst", ".zip", ".csv", ".txt", ".npy", ".parquet", ".bag",
+             ".db3", ".mcap", ".ulg"}
+
+
+@dataclass(frozen=True)
+class FleetConfig:
+    """What every record of a fleet goes through, and how it is read.
+
+    Parameters
+    ----------
+    imu : ImuConfig
+        The steps' settings (its ``n_jobs`` is not used: the records are the tasks).
+    steps : tuple of str
+        Among ``"allan"``, ``"study"``, ``"loop"``; all three by default.
+    split, loop_split : SplitSpec, optional
+        The study's and the loop's segments, resolved against each record (default: those
+        of ``imu``).
+    columns : tuple of str, optional
+        The axes, ``COL`` or ``COL:SENSOR:UNITS`` (default: every column whose name or file
+        tells a gyro or an accelerometer).
+    units : UnitsSpec, optional
+        Units of every column or per column.
+    temperature : str, optional
+        A column the loop may use (default: one named temperature, temp or temp_c, if any).
+    load : mapping
+        Keyword options of :func:`fosmodel.io.loader.load_record` (rate, gaps, topic...).
+    reports : bool
+        Also write each record's reports (tables and figures) into its folder.
+    """
+
+    imu: ImuConfig = field(default_factory=lambda: ImuConfig(n_jobs=1))
+    steps: tuple[str, ...] = STEPS
+    split: SplitSpec | None = None
+    loop_split: SplitSpec | None = None
+    columns: tuple[str, ...] | None = None
+    units: UnitsSpec | None = None
+    temperature: str | None = None
+    load: Mapping[str, Any] = field(default_factory=dict)
+    reports: bool = False
+
+
+def record_name(path: str | os.PathLike[str]) -> str:
+    """Return a record's name in the store: its file name without the format's suffixes."""
+    name = Path(path).name
+    while Path(name).suffix.lower() in _SUFFIXES and Path(name).stem:
+        name = Path(name).stem
+    return name
+
+
+
+def fingerprint(path: str | os.PathLike[str], config: FleetConfig) -> str:
+    """Say what a record's results depend on: its file (path, size, time) and the config."""
+    stat = Path(path).stat()
+    steps = replace(config, imu=replace(config.imu, n_jobs=1))  # the jobs change no result
+    return json.dumps({"file": str(Path(path).resolve()), "size": stat.st_size,
+                       "mtime_ns": stat.st_mtime_ns, "config": repr(steps)})
+
+
+def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
+               config: FleetConfig) -> float:
+    """Run the chosen steps on one record and publish its folder in ``store`` (the task).
+
+    Returns
+    -------
+    float
+        The task's time (s), also in the record's marker.
+    """
+    start = time.perf_counter()
+    name, folder = record_name(path), Path(store) / record_name(path)
+    with threadpool_limits(limits=1, user_api="blas"):  # the same bits in any process
+        rec = load_record(Path(path), columns=_wanted(config), **config.load)
+        axes, aux = record_axes(rec, config)
+        outcome = _steps(rec, axes, aux, config)
+        rows = _rows(name, outcome)
+        if folder.exists():  # another file's or configuration's results
+            shutil.rmtree(folder)
+        with report_directory(folder) as tmp:
+            rows.to_csv(tmp / "rows.csv", index=False)
+            if config.reports:
+                _reports(outcome, tmp / "report", name)
+            seconds = {**outcome.seconds, "total": time.perf_counter() - start}
+            marker = {"record": name, "fingerprint": fingerprint(path, config),
+                      "n_samples": rec.n_samples, "rate_hz": rec.require_rate(),
+                      "axes": [a.column for a in axes], "steps": list(config.steps),
+                      "seconds": seconds}
+            (tmp / MARKER).write_text(json.dumps(marker, indent=1) + "\n")
+    return seconds["total"]
+
+
+def _wanted(config: FleetConfig) -> list[str] | None:
+    if config.columns is None:
+        return None
+    return [s.partition(":")[0] for s in config.columns] + (
+        [config.temperature] if config.temperature else [])
+
+
+def record_axes(rec: Record, config: FleetConfig) -> tuple[list[Axis], dict[str, np.ndarray]]:
+    """Return a record's axes and the auxiliary channel (a temperature) its loops may use.
+
+    Raises
+    ------
+    InputError
+        No column tells a gyro or an accelerometer and none is named.
+    """
+    temperature = config.temperature or next((c for c in rec.names if TEMPERATURE.match(c)),
+                                             None)
+    units = config.units
+    specs = list(config.columns or [c for c in rec.names if c != temperature and (
+        infer_axis(c)[0] or c in rec.units or (units and c in units.columns))])
+    if not specs:
+        raise InputError(f"{rec.source}: no column tells a gyro or an accelerometer by its name "
+                         f"(columns: {', '.join(rec.names)}); name the axes and give their units")
+    axes = resolve_axes(specs, given=units, declared=rec.units)
+    return axes, ({temperature: rec.column(temperature)} if temperature else {})
+
+
+@dataclass
+class _Outcome:
+    """A record through the chosen steps: the noise of its axes, each axis's study and loop."""
+
+    rec: Record
+    axes: list[Axis]
+    aux: dict[str, np.ndarray]
+    imu: ImuConfig
+    noise: ImuNoise | None = None
+    study: dict[str, StudyResult] = field(default_factory=dict)
+    loop: dict[str, LoopResult] = field(default_factory=dict)
+    seconds: dict[str, float] = field(default_factory=dict)
+
+
+def _steps(rec: Record, axes: list[Axis], aux: dict[str, np.ndarray],
+           config: FleetConfig) -> _Outcome:
+    """Run the chosen steps on every axis, as the six-axis workflow does with one job."""
+    rate, n = rec.require_rate(), rec.n_samples
+    imu = replace(config.imu, n_jobs=1)
+    if config.split is not None:
+        train_s, evaluate_s = config.split.seconds(n, rate)
+        imu = replace(imu, train_s=train_s, evaluate_s=evaluate_s)
+    if config.loop_split is not None:
+        imu = replace(imu, loop_split=config.loop_split.fractions(n, rate))
+    columns = {a.column: rec.column(a.column) for a in axes}
+    channels = {**columns, **aux}
+    out = _Outcome(rec, axes, aux, imu)
+    clock = time.perf_counter()
+    if "allan" in config.steps:
+        out.noise = imu_noise(columns, axes, rate, rec.source, min_tau=imu.min_tau)
+        out.seconds["allan"], clock = time.perf_counter() - clock, time.perf_counter()
+    if "study" in config.steps:
+        out.study = {a.column: run_study(columns[a.column], imu.study_config(rate, a))
+                     for a in axes}
+        out.seconds["study"], clock = time.perf_counter() - clock, time.perf_counter()
+    if "loop" in config.steps:
+        out.loop = {a.column: close_loop(columns[a.column],
+                                         {k: v for k, v in channels.items() if k != a.column},
+                                         imu.loop_config(rate, a)) for a in axes}
+        out.seconds["loop"] = time.perf_counter() - clock
+    return out
+
+
+def _rows(name: str, outcome: _Outcome) -> pd.DataFrame:
+    """Tabulate the record's rows of the summary: each axis's noise terms, study, loop."""
+    noise = ({r["Column"]: r for r in outcome.noise.table().to_dict(orient="records")}
+             if outcome.noise else {})
+    rows = []
+    for a in outcome.axes:
+        row: dict[str, Any] = {"record": name, "axis": a.column, "sensor": a.sensor,
+                               "units": a.units}
+        if noise:
+            row.update({k: noise[a.column][k] for k in ("N fitted", "B fitted", "K fitted")})
+        if outcome.study:
+            row.update(_without_axis(study_row(a, outcome.study[a.column])))
+        if outcome.loop:
+            row.update(_without_axis(loop_row(a, outcome.loop[a.column])))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _without_axis(row: dict[str, Any]) -> dict[str, Any]:
+    return {k: v for k, v in row.items() if k not in ("axis", "units")}
+
+
+def _reports(outcome: _Outcome, out_dir: Path, name: str) -> None:
+    """Write the record's reports: the six-axis report with every step, else each step's."""
+    from .imu_report import write_imu_report  # drawing needs matplotlib: only with reports
+
+    out_dir.mkdir()
+    rec, axes = outcome.rec, outcome.axes
+    if outcome.noise and outcome.study and outcome.loop:
+        result = ImuResult(rec.source, rec.require_rate(), rec.n_samples, outcome.imu,
+                           outcome.noise, [AxisResult(a, outcome.study[a.column],
+                                                      outcome.loop[a.column]) for a in axes],
+                           sorted(outcome.aux), outcome.seconds["allan"])
+        write_imu_report(result, out_dir, name)
+        return
+    if outcome.noise:
+        (out_dir / "noise").mkdir()
+        write_imu_noise(outcome.noise, out_dir / "noise", name)
+    for a in axes:
+        if outcome.study:
+            write_study(outcome.study[a.column], out_dir / "study" / a.column,
+                        f"{name} {a.column} ({a.units})")
+        if outcome.loop:
+            write_loop_report(outcome.loop[a.column], out_dir / "loop" / a.column,
+                              f"{name} {a.column}")
