@@ -218,8 +218,9 @@ class _LinearAR(BaseEstimator):
         self._check_fitted()
         y0, drive = free_run_inputs(y_init, n_steps, noise, self.lag_window_)
         warn_if_unstable(self.coef_, "the fitted AR model")
+        past = y0[len(y0) - self.lag_window_ :]  # the run reads these; centre no more
         with np.errstate(over="ignore", invalid="ignore"):
-            out = ar_free_run(self.coef_, y0 - self.mean_, drive)
+            out = ar_free_run(self.coef_, past - self.mean_, drive)
         return cut_at_divergence(out) + self.mean_
 
     def _coef_table(self) -> pd.DataFrame:

@@ -423,8 +423,12 @@ def one_step_mse(y: ArrayLike, prediction: ArrayLike, segment: slice) -> float:
     if pred.shape != y.shape:
         raise InputError(f"prediction has shape {pred.shape}, y has {y.shape}")
     start, stop = _segment_bounds(segment, len(y))
-    bad = np.flatnonzero(~np.isfinite(pred[start:stop]))
-    if bad.size:
-        raise InputError(f"prediction is NaN at sample {start + bad[0]} inside the segment "
-                         f"[{start}, {stop}); start the segment after the model's lag window")
-    return float(np.mean((y[start:stop] - pred[start:stop]) ** 2))
+    error = np.subtract(y[start:stop], pred[start:stop])
+    mse = float(np.mean(np.square(error, out=error)))
+    if not math.isfinite(mse):  # y is finite: a NaN prediction, or one so large it overflows
+        bad = np.flatnonzero(~np.isfinite(pred[start:stop]))
+        if bad.size:
+            raise InputError(f"prediction is NaN at sample {start + bad[0]} inside the segment "
+                             f"[{start}, {stop}); start the segment after the model's lag "
+                             "window")
+    return mse
