@@ -102,7 +102,7 @@ def test_a_failed_record_is_named_after_the_others_are_stored(files, tmp_path):
         run_fleet([*files, bad], tmp_path / "store", FleetConfig(imu=SMALL, steps=("allan",)))
     message = str(error.value)
     assert message.startswith("record imu9: ") and message.endswith(
-        f"(1 of 4 records failed; the others are stored in {tmp_path / 'store'}, and a rerun "
+        f"(1 of 4 records failed; the other 3 are stored in {tmp_path / 'store'}, and a rerun "
         "does only the failed)")
     assert all((tmp_path / "store" / n / MARKER).is_file() for n in NAMES)
     assert not (tmp_path / "store" / "imu9").exists() and not (tmp_path / "store" /

@@ -170,5 +170,7 @@ def _raise(failures: Mapping[str, BaseException], total: int, store: Path) -> No
     name, error = next(iter(failures.items()))
     if not isinstance(error, InputError):
         raise error
-    raise InputError(f"record {name}: {error} ({len(failures)} of {total} records failed; "
-                     f"the others are stored in {store}, and a rerun does only the failed)")
+    done = total - len(failures)
+    raise InputError(f"record {name}: {error} ({len(failures)} of {total} records failed"
+                     + (f"; the other {done} are stored in {store}, and a rerun does only the "
+                        "failed)" if done else ")"))
