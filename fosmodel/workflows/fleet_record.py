@@ -33,7 +33,7 @@ from ..loop.closeloop import LoopResult, close_loop
 from ..loop.loop_report import write_loop_report
 from ..noise.axes import Axis, UnitsSpec, infer_axis, resolve_axes
 from ..noise.imu_noise import ImuNoise, imu_noise, write_imu_noise
-from ..study.harness import StudyResult
+from ..study.harness import StudyResult, study_split
 from ..study.report import write_study
 from ..study.runner import run_study
 from .imu import STEPS, AxisResult, ImuConfig, ImuResult, loop_row, study_row
@@ -112,7 +112,7 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
     start = time.perf_counter()
     name, folder = record_name(path), Path(store) / record_name(path)
     with threadpool_limits(limits=1, user_api="blas"):  # the same bits in any process
-        rec = load_record(Path(path), columns=_wanted(config), **config.load)
+        rec = load_record(Path(path), **config.load)  # every column: the temperature too
         axes, aux = record_axes(rec, config)
         outcome = _steps(rec, axes, aux, config)
         rows = _rows(name, outcome)
@@ -129,13 +129,6 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
                       "seconds": seconds}
             (tmp / MARKER).write_text(json.dumps(marker, indent=1) + "\n")
     return seconds["total"]
-
-
-def _wanted(config: FleetConfig) -> list[str] | None:
-    if config.columns is None:
-        return None
-    return [s.partition(":")[0] for s in config.columns] + (
-        [config.temperature] if config.temperature else [])
 
 
 def record_axes(rec: Record, config: FleetConfig) -> tuple[list[Axis], dict[str, np.ndarray]]:
@@ -182,6 +175,11 @@ def _steps(rec: Record, axes: list[Axis], aux: dict[str, np.ndarray],
         imu = replace(imu, train_s=train_s, evaluate_s=evaluate_s)
     if config.loop_split is not None:
         imu = replace(imu, loop_split=config.loop_split.fractions(n, rate))
+    for a in axes:  # refuse a split or units the steps cannot take before any work
+        if "study" in config.steps:
+            study_split(n, imu.study_config(rate, a))
+        if "loop" in config.steps:
+            imu.loop_config(rate, a)
     columns = {a.column: rec.column(a.column) for a in axes}
     channels = {**columns, **aux}
     out = _Outcome(rec, axes, aux, imu)
