@@ -106,6 +106,24 @@ def test_nonlinearity_reset():
     assert fires <= _false_alarm_bound(100, 0.05)
 
 
+def test_nonlinearity_in_blocks_matches_one_pass(monkeypatch):
+    # long records accumulate the Gram matrix over blocks: force it, blocks of 37 rows
+    rng = np.random.default_rng(5)
+    y = lfilter([1.0], [1.0, -0.5], rng.standard_normal(5000))
+    lagged = np.column_stack([np.r_[np.zeros(k), y[:-k]] for k in range(1, 5)])
+    r = 0.05 * lagged[:, 0] * lagged[:, 2] + rng.standard_normal(5000)
+    one_pass = dg.nonlinearity(r, lagged)
+    monkeypatch.setattr(dg, "BLOCKED_ROWS", 0)
+    monkeypatch.setattr(dg, "BLOCK", 37)
+    blocked = dg.nonlinearity(r, lagged)
+    assert blocked.statistic == pytest.approx(one_pass.statistic, rel=1e-9)
+    assert blocked.p_value == pytest.approx(one_pass.p_value, rel=1e-6)
+    assert blocked.evidence == one_pass.evidence == {
+        "products": 10, "max_lag": 4, "strongest": "y[n-1]*y[n-3]"}
+    np.testing.assert_allclose(blocked.plot["product"], one_pass.plot["product"],
+                               rtol=1e-12, atol=1e-12)
+
+
 @pytest.mark.parametrize("shape, form", [("linear", "linear"), ("warmup", "exponential")])
 def test_trend_detects_and_names_the_form(shape, form):
     n = 20000

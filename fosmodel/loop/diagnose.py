@@ -36,6 +36,10 @@ from scipy.signal import zoom_fft
 from ..core.fos import StopRule, fos_search
 
 ALPHA = 1e-3
+# Records over BLOCKED_ROWS have the nonlinearity test's Gram matrix accumulated over blocks of
+# BLOCK rows; shorter ones build the matrix of products as before (bit-identical results).
+BLOCKED_ROWS = 2**21
+BLOCK = 2**16
 
 
 @dataclass
@@ -309,30 +313,73 @@ def nonlinearity(residual: np.ndarray, lagged: np.ndarray, alpha: float = ALPHA)
     """
     lags = lagged.shape[1]
     iu = np.triu_indices(lags)
-    n_cols = lags + len(iu[0])
-    x = np.empty((len(lagged), n_cols), order="F")  # columns contiguous: built one at a time
-    for k in range(lags):
-        x[:, k] = lagged[:, k] - lagged[:, k].mean()
-    for k, (i, j) in enumerate(zip(*iu), start=lags):
-        np.multiply(x[:, i], x[:, j], out=x[:, k])
-        x[:, k] -= x[:, k].mean()
     r = residual - residual.mean()
-    gram, g, total = x.T @ x, x.T @ r, float(r @ r)
+    if len(lagged) > BLOCKED_ROWS:
+        gram, g, product = _blocked_product_gram(lagged, r, iu)
+    else:
+        gram, g, product = _product_gram(lagged, r, iu)
+    total = float(r @ r)
     diag = np.diag(gram)
     scale = np.sqrt(np.where(diag > 0, diag, 1.0))  # standardise in the normal equations
     gram, g = gram / np.outer(scale, scale), g / scale
     coef = np.linalg.lstsq(gram, g, rcond=None)[0]
     rss1 = total - float(g @ coef)
     rss0 = total - float(g[:lags] @ np.linalg.lstsq(gram[:lags, :lags], g[:lags], rcond=None)[0])
-    products = x[:, lags:]
-    q, dof = products.shape[1], len(x) - 1 - lags - products.shape[1]
+    q = len(iu[0])
+    dof = len(lagged) - 1 - lags - q
     f = ((rss0 - rss1) / q) / (rss1 / dof)
     strongest = int(np.argmax(np.abs(coef[lags:])))  # on standardised products
     i, j = iu[0][strongest] + 1, iu[1][strongest] + 1
     return Finding("nonlinear", float(f), float(stats.f.sf(f, q, dof)), alpha,
                    {"products": int(q), "max_lag": int(lags),
                     "strongest": f"y[n-{i}]^2" if i == j else f"y[n-{i}]*y[n-{j}]"},
-                   {"product": products[:, strongest], "residual": residual})
+                   {"product": product(strongest), "residual": residual})
+
+
+def _product_gram(lagged: np.ndarray, r: np.ndarray, iu: tuple) -> tuple:
+    """Gram matrix and ``X' r`` of the centred lags and their centred products, one pass.
+
+    Returns ``(gram, X' r, product)``, ``product(k)`` the k-th centred product column.
+    """
+    lags = lagged.shape[1]
+    x = np.empty((len(lagged), lags + len(iu[0])), order="F")  # columns built one at a time
+    for k in range(lags):
+        x[:, k] = lagged[:, k] - lagged[:, k].mean()
+    for k, (i, j) in enumerate(zip(*iu), start=lags):
+        np.multiply(x[:, i], x[:, j], out=x[:, k])
+        x[:, k] -= x[:, k].mean()
+    return x.T @ x, x.T @ r, lambda k: x[:, lags + k].copy()  # a copy: x is freed after
+
+
+def _blocked_product_gram(lagged: np.ndarray, r: np.ndarray, iu: tuple) -> tuple:
+    """:func:`_product_gram` accumulated over blocks of ``BLOCK`` rows, for long records.
+
+    The matrix of products would hold ``L (L + 3) / 2`` columns of the record (a
+    gigabyte for a day at 200 Hz); a block's stays in the cache.  Equal to the
+    one-pass matrices within rounding.
+    """
+    n = len(lagged)
+    means = lagged.mean(axis=0)
+    blocks = [(lo, min(lo + BLOCK, n)) for lo in range(0, n, BLOCK)]
+
+    def centred(lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+        x = lagged[lo:hi] - means
+        return x, x[:, iu[0]] * x[:, iu[1]]
+
+    product_means = sum(centred(lo, hi)[1].sum(axis=0) for lo, hi in blocks) / n
+    size = lagged.shape[1] + len(iu[0])
+    gram, g = np.zeros((size, size)), np.zeros(size)
+    for lo, hi in blocks:
+        x, products = centred(lo, hi)
+        block = np.hstack([x, products - product_means])
+        gram += block.T @ block
+        g += block.T @ r[lo:hi]
+
+    def product(k: int) -> np.ndarray:
+        i, j = iu[0][k], iu[1][k]
+        return (lagged[:, i] - means[i]) * (lagged[:, j] - means[j]) - product_means[k]
+
+    return gram, g, product
 
 
 def _rss(a: np.ndarray, b: np.ndarray, coef: bool = False):
