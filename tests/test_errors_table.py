@@ -196,6 +196,11 @@ BUILDERS = {
     "output file is a directory": lambda tmp: _fit(tmp, _record())[:-1] + [str(tmp)],
     "report directory is a file":
         lambda tmp: _report("allan", tmp, _write(tmp, _record()))[:-1] + [str(tmp / "rec.csv")],
+    "two records of one name in a fleet": lambda tmp: [
+        "fleet", _write(tmp, _record()), _write(tmp, _record(), "rec.csv.gz"), "--out",
+        str(tmp / "store")],
+    "unknown step of a fleet": lambda tmp: ["fleet", _write(tmp, _record()), "--steps",
+                                            "allan,fit", "--out", str(tmp / "store")],
 }
 
 # Problems whose input is one of conftest's record files: (the fixture that writes it, a
