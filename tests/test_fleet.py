@@ -122,12 +122,15 @@ def test_the_reports_of_a_chosen_step_on_a_chosen_axis(files, tmp_path):
 
 @pytest.mark.parametrize("bad, message", [
     (dict(files=[]), "no record in the fleet"),
-    (dict(files=["a/imu1.csv", "b/imu1.csv.gz"]),
-     "two records named 'imu1' (a/imu1.csv and b/imu1.csv.gz): the store keeps a folder per "
+    (dict(files=["no/such/imu1.csv"]), "no/such/imu1.csv: no such file"),
+    (dict(files=["imu1.csv", "imu1.csv.gz"]),
+     "two records named 'imu1' (imu1.csv and imu1.csv.gz): the store keeps a folder per "
      "name; rename one"),
     (dict(steps=("allan", "fit")), "unknown step 'fit'; the steps are allan, study, loop"),
 ])
-def test_refusals(bad, message, files, tmp_path):
+def test_refusals(bad, message, files, tmp_path, monkeypatch):
+    monkeypatch.chdir(files[0].parent)  # where imu1.csv is
+    (files[0].parent / "imu1.csv.gz").write_bytes(b"")
     config = FleetConfig(steps=bad.get("steps", STEPS))
     with pytest.raises(InputError) as error:
         run_fleet(bad.get("files", files), tmp_path / "store", config)

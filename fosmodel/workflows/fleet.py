@@ -84,8 +84,9 @@ def run_fleet(
     Raises
     ------
     InputError
-        No file, two records of one name, an unknown step; or a record refused (the first
-        named, after every other record has run and been stored).
+        No file, a file missing, two records of one name, an unknown step (before any
+        work); or a record refused (the first to fail is named, after every other record has
+        run and been stored).
     """
     config = config or FleetConfig()
     names = _names(files)
@@ -119,6 +120,8 @@ def _names(files: Sequence[str | os.PathLike[str]]) -> dict[str, str]:
     names: dict[str, str] = {}
     for path in files:
         name = record_name(path)
+        if not Path(path).exists():  # before any work, as every command does
+            raise InputError(f"{path}: no such file")
         if name in names:
             raise InputError(f"two records named {name!r} ({names[name]} and {path}): the "
                              "store keeps a folder per name; rename one")
@@ -163,7 +166,11 @@ def _run(todo: list[str], names: Mapping[str, str], store: Path, config: FleetCo
     futures = {client.submit(run_record, names[n], store, config, key=f"fleet-{n}-{i}",
                              pure=False): n for i, n in enumerate(todo)}
     for future in as_completed(futures):
-        yield futures[future], future.exception() if future.status == "error" else None
+        if future.status == "finished":
+            yield futures[future], None
+        else:  # raised, or cancelled (its worker lost)
+            yield futures[future], (future.exception() if future.status == "error" else
+                                    RuntimeError(f"the task was {future.status}"))
 
 
 def _raise(failures: Mapping[str, BaseException], total: int, store: Path) -> None:
