@@ -91,13 +91,12 @@ def record_name(path: str | os.PathLike[str]) -> str:
     return name
 
 
-
 def fingerprint(path: str | os.PathLike[str], config: FleetConfig) -> str:
     """Say what a record's results depend on: its file (path, size, time) and the config."""
     stat = Path(path).stat()
-    steps = replace(config, imu=replace(config.imu, n_jobs=1))  # the jobs change no result
+    settings = replace(config, imu=replace(config.imu, n_jobs=1))  # jobs change no result
     return json.dumps({"file": str(Path(path).resolve()), "size": stat.st_size,
-                       "mtime_ns": stat.st_mtime_ns, "config": repr(steps)})
+                       "mtime_ns": stat.st_mtime_ns, "config": repr(settings)})
 
 
 def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
