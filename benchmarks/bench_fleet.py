@@ -109,7 +109,8 @@ def figure(tasks: list[float], measured: dict[int, float], here: float, out: Pat
     left.yaxis.set_major_locator(MaxNLocator(integer=True))
     left.set_title("task sizes", fontsize="medium")
     workers = np.array([1, 2, 4, 8, 16, 32])
-    for n, style in ((len(tasks), "o-"), (FLEET, "o--")):
+    for n, style in sorted({(len(tasks), "o-"), (FLEET, "o--")} if len(tasks) != FLEET
+                           else {(FLEET, "o-")}):
         right.loglog(workers, [schedule(_tiled(np.array(tasks), n), w) for w in workers], style,
                      color="0.5", label=f"{n} records of these sizes, no overhead")
     right.loglog(list(measured), list(measured.values()), "s", color="C3", ms=8,
@@ -172,12 +173,13 @@ def main() -> None:
     here, w1, w2 = best["in-process"], best["1 worker"], best["2 workers"]
     print(f"task sizes (s, in-process): min {sizes.min():.2f}, median {np.median(sizes):.2f}, "
           f"max {sizes.max():.2f}, total {sizes.sum():.2f}")
-    print("  " + ", ".join(f"{k} {v:.2f}" for k, v in tasks.items()))
+    if len(tasks) <= 12:  # each record's, when they fit on a line
+        print("  " + ", ".join(f"{k} {v:.2f}" for k, v in tasks.items()))
     print(f"best of {args.repeat}: in-process {here:.2f} s, 1 worker {w1:.2f} s, 2 workers "
           f"{w2:.2f} s")
     print(f"1 worker / 2 workers = {w1 / w2:.2f}; in-process / 2 workers = {here / w2:.2f}; "
           f"1 worker / in-process = {w1 / here:.2f}")
-    for n in (len(sizes), FLEET):
+    for n in sorted({len(sizes), FLEET}):
         print(f"from the task sizes, {n} records of them, no overhead (longest first): "
               + ", ".join(f"{w} worker(s) {schedule(_tiled(sizes, n), w):.1f} s"
                           for w in (1, 2, 4, 8, 16, 32)))
