@@ -16,17 +16,20 @@ clear message where it is absent.  Writes every report, table and figure under
   MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped).
 * The effects the issues point to, checked one by one.
 
-Run: ``python studies/real_data.py`` (about three quarters of an hour on 2 cores).
+Run: ``python studies/real_data.py [--jobs N]``; the studies and loops of the axes run on N
+worker processes (2 by default).
 """
 
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from doc_pages import README, replace_section, show_figure
+from joblib import Parallel, delayed
 
 from fosmodel.io.loader import Record, load_record
 from fosmodel.io.samples import load_mpu6050_static
@@ -49,6 +52,9 @@ SUNSIDED = {**ADIS}  # same column names and units
 TOMI = {"gx": ("gyro", "deg/s"), "gy": ("gyro", "deg/s"), "gz": ("gyro", "deg/s"),
         "ax": ("accel", "g"), "ay": ("accel", "g"), "az": ("accel", "g")}
 LOOP_ADIS = (1, 2, 3, 4, 5, 6)
+#: Studies and loops run at once, in worker processes (``--jobs N``; each is independent, and
+#: its numbers are the same whichever process runs it).
+JOBS = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 2
 SUNSIDED_FILE = "unmoved-with-x-pointing-forward-10min.csv.gz"
 
 
@@ -99,16 +105,30 @@ def study_row(record: str, axis: str, result: StudyResult) -> dict:
     return out
 
 
+def _in_workers(task, items: list[tuple]) -> Iterator:
+    """``task(*item)`` for every item on ``JOBS`` worker processes, the results in order as
+    they come (the records' columns are memory-mapped to the workers, not copied)."""
+    if JOBS == 1:
+        return (task(*item) for item in items)
+    return Parallel(n_jobs=JOBS, return_as="generator")(delayed(task)(*item) for item in items)
+
+
+def _study(name: str, axis: str, y: np.ndarray, rate: float, sensor: str,
+           units: str) -> StudyResult:
+    """One axis's study, its report written by the worker that ran it."""
+    result = run_study(y, StudyConfig(rate=rate, sensor=sensor, units=units))
+    write_study(result, OUT / "study" / slug(name) / axis, f"{name} {axis} ({units})")
+    return result
+
+
 def run_studies(recs) -> tuple[pd.DataFrame, dict]:
+    items = [(name, axis, rec.column(axis), rec.rate, sensor, units)
+             for name, (rec, axes) in recs.items() for axis, (sensor, units) in axes.items()]
     rows, kept = [], {}
-    for name, (rec, axes) in recs.items():
-        for axis, (sensor, units) in axes.items():
-            result = run_study(rec.column(axis), StudyConfig(rate=rec.rate, sensor=sensor,
-                                                             units=units))
-            write_study(result, OUT / "study" / slug(name) / axis, f"{name} {axis} ({units})")
-            rows.append(study_row(name, axis, result))
-            kept[(name, axis)] = result
-        print(f"study: {name} done", flush=True)
+    for (name, axis, *_), result in zip(items, _in_workers(_study, items)):
+        rows.append(study_row(name, axis, result))
+        kept[(name, axis)] = result
+        print(f"study: {name} {axis} done", flush=True)
     return pd.DataFrame(rows), kept
 
 
@@ -213,17 +233,23 @@ def run_loops(recs, mtig_keep: Record, mtig_clip: Record) -> tuple[pd.DataFrame,
     targets += [(n, *recs[n]) for n in ("MPU-6050 sunsided", "MPU-6050 tomisuarez2")]
     targets += [("MTi-G (outliers kept)", mtig_keep, {"gyro_x": ("gyro", "rad/s")}),
                 ("MTi-G (outliers clipped)", mtig_clip, {"gyro_x": ("gyro", "rad/s")})]
+    items = [(name, axis, rec.column(axis), {c: rec.column(c) for c in rec.names if c != axis},
+              rec.rate, sensor, units)
+             for name, rec, axes in targets for axis, (sensor, units) in axes.items()]
     rows, results = [], {}
-    for name, rec, axes in targets:
-        for axis, (sensor, units) in axes.items():
-            others = {c: rec.column(c) for c in rec.names if c != axis}
-            res = close_loop(rec.column(axis), others,
-                             LoopConfig(rate=rec.rate, sensor=sensor, units=units))
-            write_loop_report(res, OUT / "loop" / slug(name) / axis, f"{name} {axis}")
-            rows.append(loop_row(name, axis, res))
-            results[(name, axis)] = res
-            print(f"loop: {name} {axis}: {rows[-1]['Effects kept']}", flush=True)
+    for (name, axis, *_), res in zip(items, _in_workers(_loop, items)):
+        rows.append(loop_row(name, axis, res))
+        results[(name, axis)] = res
+        print(f"loop: {name} {axis}: {rows[-1]['Effects kept']}", flush=True)
     return pd.DataFrame(rows), results
+
+
+def _loop(name: str, axis: str, y: np.ndarray, others: dict[str, np.ndarray], rate: float,
+          sensor: str, units: str) -> LoopResult:
+    """One axis's residual loop, its report written by the worker that ran it."""
+    res = close_loop(y, others, LoopConfig(rate=rate, sensor=sensor, units=units))
+    write_loop_report(res, OUT / "loop" / slug(name) / axis, f"{name} {axis}")
+    return res
 
 
 # -- the effects the issue points to -----------------------------------------------------------
