@@ -91,7 +91,7 @@ def test_refusals_take_one_line_and_write_nothing(imu_csv, tmp_path, capsys):
     assert code == 2 and not out.exists()
     assert err.strip().splitlines()[-1] == (
         f"fosmodel: error: {other}: no column tells a gyro or an accelerometer by its name "
-        "(columns: foo, bar); name them with --columns and give their units with --units")
+        "(columns: foo, bar); name the axes and give their units")
     with pytest.raises(SystemExit) as stop:
         main(["imu", str(path), "--segments", "--out", str(out)])
     assert stop.value.code == 2 and not out.exists()

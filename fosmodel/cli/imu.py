@@ -8,12 +8,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import re
 import sys
 from pathlib import Path
 from typing import Any
 
-from ..core.exceptions import InputError
 from ..io.output import (
     refuse_overwrite,
     report_directory,
@@ -22,7 +20,7 @@ from ..io.output import (
     write_text,
 )
 from ..io.split import SplitSpec
-from ..noise.axes import UnitsSpec, infer_axis
+from ..noise.axes import UnitsSpec
 from ..study.harness import METHODS
 from .arguments import (
     RECORD_HELP,
@@ -34,11 +32,8 @@ from .arguments import (
     positive_float,
     positive_int,
 )
-from .commands import _axes, _load
+from .commands import _load
 from .parsing import parsed
-
-#: Names a temperature column goes by (a ROS bag's or a ULog's reader names it temperature).
-_TEMPERATURE = re.compile(r"^(die_?)?temp(erature)?(_?(c|degc|deg_c))?$", re.IGNORECASE)
 
 
 def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -94,21 +89,14 @@ def workflow_settings(args: argparse.Namespace) -> dict[str, Any]:
 
 def imu(args: argparse.Namespace) -> int:
     """Run the six-axis workflow on ``args.file`` and publish its report in ``args.out``."""
-    from ..workflows.imu import ImuConfig, run_imu
+    from ..workflows.imu import ImuConfig, record_axes, run_imu
     from ..workflows.imu_report import console_summary, write_imu_report
 
     json_path = writable_file(args.json) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     rec = _load(args)  # every column: an IMU record has few, and its temperature is found
-    temperature = args.temperature or next((c for c in rec.names if _TEMPERATURE.match(c)), None)
-    specs = args.columns or [c for c in rec.names if c != temperature and (
-        infer_axis(c)[0] or c in rec.units or (args.units and c in args.units.columns))]
-    if not specs:
-        raise InputError(f"{rec.source}: no column tells a gyro or an accelerometer by its name "
-                         f"(columns: {', '.join(rec.names)}); name them with --columns and "
-                         "give their units with --units")
-    axes = _axes(args, specs, rec)
+    axes, aux = record_axes(rec, args.columns, args.units, args.temperature)
     for axis in axes:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
     rate = rec.require_rate()
@@ -116,7 +104,6 @@ def imu(args: argparse.Namespace) -> int:
     config = ImuConfig(**workflow_settings(args), train_s=train_s, evaluate_s=evaluate_s,
                        loop_split=args.loop_split.fractions(rec.n_samples, rate),
                        n_jobs=args.jobs)
-    aux = {temperature: rec.column(temperature)} if temperature else None
     result = run_imu({a.column: rec.column(a.column) for a in axes}, axes, rate, rec.source,
                      aux=aux, config=config,
                      progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,

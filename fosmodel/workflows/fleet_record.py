@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import shutil
 import time
 from collections.abc import Mapping
@@ -24,24 +23,23 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
-from ..core.exceptions import InputError
 from ..io.loader import load_record
 from ..io.output import report_directory
 from ..io.record import Record
 from ..io.split import SplitSpec
 from ..loop.closeloop import LoopResult, close_loop
 from ..loop.loop_report import write_loop_report
-from ..noise.axes import Axis, UnitsSpec, infer_axis, resolve_axes
+from ..noise.axes import Axis, UnitsSpec
 from ..noise.imu_noise import ImuNoise, imu_noise, write_imu_noise
 from ..study.harness import StudyResult, study_split
 from ..study.report import write_study
 from ..study.runner import run_study
 from .imu import STEPS, AxisResult, ImuConfig, ImuResult, loop_row, study_row
+from .imu import record_axes as imu_record_axes
 
 #: The completion marker of a record's folder in the store.
 MARKER = "done.json"
 #: Names a temperature column goes by (a ROS bag's or a ULog's reader names it temperature).
-TEMPERATURE = re.compile(r"^(die_?)?temp(erature)?(_?(c|degc|deg_c))?$", re.IGNORECASE)
 _SUFFIXES = {".gz", ".bz2", ".xz", ".zst", ".zip", ".csv", ".txt", ".npy", ".parquet", ".bag",
              ".db3", ".mcap", ".ulg"}
 
@@ -131,23 +129,11 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
 
 
 def record_axes(rec: Record, config: FleetConfig) -> tuple[list[Axis], dict[str, np.ndarray]]:
-    """Return a record's axes and the auxiliary channel (a temperature) its loops may use.
+    """Return a record's axes and temperature as the fleet's configuration names them.
 
-    Raises
-    ------
-    InputError
-        No column tells a gyro or an accelerometer and none is named.
+    See :func:`fosmodel.workflows.imu.record_axes`.
     """
-    temperature = config.temperature or next((c for c in rec.names if TEMPERATURE.match(c)),
-                                             None)
-    units = config.units
-    specs = list(config.columns or [c for c in rec.names if c != temperature and (
-        infer_axis(c)[0] or c in rec.units or (units and c in units.columns))])
-    if not specs:
-        raise InputError(f"{rec.source}: no column tells a gyro or an accelerometer by its name "
-                         f"(columns: {', '.join(rec.names)}); name the axes and give their units")
-    axes = resolve_axes(specs, given=units, declared=rec.units)
-    return axes, ({temperature: rec.column(temperature)} if temperature else {})
+    return imu_record_axes(rec, config.columns, config.units, config.temperature)
 
 
 @dataclass

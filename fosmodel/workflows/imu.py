@@ -13,6 +13,7 @@ deterministic.
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -24,13 +25,16 @@ import pandas as pd
 from ..core.exceptions import InputError
 from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_covariance
 from ..filter.statespace import StateSpace
+from ..io.record import Record
 from ..loop.closeloop import LoopConfig, LoopResult, close_loop
-from ..noise.axes import Axis
+from ..noise.axes import Axis, UnitsSpec, infer_axis, resolve_axes
 from ..noise.imu_noise import ImuNoise, imu_noise
 from ..study.harness import METHODS, StudyConfig, StudyResult, study_split
 from ..study.runner import run_study
 
 Progress = Callable[[str], None]
+#: Names a temperature column goes by (a ROS bag's or a ULog's reader names it temperature).
+TEMPERATURE = re.compile(r"^(die_?)?temp(erature)?(_?(c|degc|deg_c))?$", re.IGNORECASE)
 STEPS = ("allan", "study", "loop")
 
 
@@ -149,6 +153,40 @@ class ImuResult:
                 "aux": self.aux, "noise": self.noise.to_dict(),
                 "study": _records(self.study_table()), "loop": _records(self.loop_table()),
                 "loops": {a.axis.column: a.loop.to_json_dict() for a in self.axes}}
+
+
+def record_axes(
+    rec: Record, columns: Sequence[str] | None = None, units: UnitsSpec | None = None,
+    temperature: str | None = None,
+) -> tuple[list[Axis], dict[str, np.ndarray]]:
+    """Return a record's axes and the auxiliary channel (a temperature) its loops may use.
+
+    Parameters
+    ----------
+    rec : Record
+    columns : sequence of str, optional
+        The axes, each ``COLUMN`` or ``COLUMN:SENSOR:UNITS`` (default: every column whose
+        name or file tells a gyro or an accelerometer, or whose units ``units`` gives).
+    units : UnitsSpec, optional
+        Units given for every column or per column.
+    temperature : str, optional
+        The temperature column (default: a column named like ``temperature``, ``temp``,
+        ``temp_c``, if any).
+
+    Raises
+    ------
+    InputError
+        No column tells a gyro or an accelerometer and none is named, or an axis whose sensor
+        or units cannot be told (:func:`fosmodel.noise.axes.resolve_axes`).
+    """
+    temperature = temperature or next((c for c in rec.names if TEMPERATURE.match(c)), None)
+    specs = list(columns or [c for c in rec.names if c != temperature and (
+        infer_axis(c)[0] or c in rec.units or (units and c in units.columns))])
+    if not specs:
+        raise InputError(f"{rec.source}: no column tells a gyro or an accelerometer by its name "
+                         f"(columns: {', '.join(rec.names)}); name the axes and give their units")
+    axes = resolve_axes(specs, given=units, declared=rec.units)
+    return axes, ({temperature: rec.column(temperature)} if temperature else {})
 
 
 def run_imu(
