@@ -57,7 +57,6 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
     add_loader_options(parser, contiguous="the six-axis workflow")
     parser.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS,...",
                         help=UNITS_HELP + " (default: from the names, or the file's)")
-    parser.add_argument("--sensor", choices=("accel", "gyro"), help=argparse.SUPPRESS)
     parser.add_argument("--temperature", metavar="COL",
                         help="temperature column the loop may use (default: a column named "
                              "temperature, temp or temp_c, if any)")
