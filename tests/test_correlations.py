@@ -33,6 +33,20 @@ def _assert_close(fast, ref, scale):
     np.testing.assert_allclose(fast, ref, rtol=1e-10, atol=1e-10 * scale)
 
 
+def _scale(ref):
+    return float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
+
+
+def _assert_matches(fast, ref):
+    """Every mean the search reads and every Gram column equal to the reference's."""
+    scale = _scale(ref)
+    assert fast.n_samples == ref.n_samples
+    for name in ("y_mean", "y_mean_sq", "means", "target", "diag"):
+        _assert_close(getattr(fast, name), getattr(ref, name), scale)
+    for j in range(len(ref.means)):
+        _assert_close(fast.column(j), ref.column(j), scale)
+
+
 @pytest.mark.parametrize("spec", SPECS, ids=lambda s: f"L{s.max_lag}CP{s.degree}")
 @pytest.mark.parametrize("table_degree", [0, 2, 3, 4])
 @pytest.mark.parametrize("n", [None, 700])
@@ -43,15 +57,7 @@ def test_fast_path_matches_reference(spec, table_degree, n):
     n0 = spec.lag_window
     fast = LagCorrelations(terms, signals, n0, table_degree=table_degree)
     ref = DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
-    scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
-    assert fast.n_samples == ref.n_samples
-    _assert_close(fast.y_mean, ref.y_mean, scale)
-    _assert_close(fast.y_mean_sq, ref.y_mean_sq, scale)
-    _assert_close(fast.means, ref.means, scale)
-    _assert_close(fast.target, ref.target, scale)
-    _assert_close(fast.diag, ref.diag, scale)
-    for j in range(len(terms)):
-        _assert_close(fast.column(j), ref.column(j), scale)
+    _assert_matches(fast, ref)
 
 
 @pytest.mark.parametrize("spec", [SPECS[1], SPECS[4]], ids=lambda s: f"L{s.max_lag}CP{s.degree}")
@@ -65,7 +71,7 @@ def test_blocked_weighted_gram_matches_reference(spec, monkeypatch):
     n0 = spec.lag_window
     fast = LagCorrelations(terms, signals, n0, table_degree=3)
     ref = DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
-    scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
+    scale = _scale(ref)
     calls = []
     blocked = LagCorrelations._weighted_gram_sums
     monkeypatch.setattr(LagCorrelations, "_weighted_gram_sums",
@@ -88,14 +94,7 @@ def test_window_summed_in_blocks_matches_reference(spec, table_degree, monkeypat
     fast = LagCorrelations(terms, signals, n0, table_degree=table_degree)
     assert len(fast._blocks()) == -(-(150 - n0) // 7)
     ref = DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
-    scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
-    _assert_close(fast.y_mean, ref.y_mean, scale)
-    _assert_close(fast.y_mean_sq, ref.y_mean_sq, scale)
-    _assert_close(fast.means, ref.means, scale)
-    _assert_close(fast.target, ref.target, scale)
-    _assert_close(fast.diag, ref.diag, scale)
-    for j in range(len(terms)):
-        _assert_close(fast.column(j), ref.column(j), scale)
+    _assert_matches(fast, ref)
 
 
 def test_blocked_sums_select_the_same_terms_as_one_pass(monkeypatch):
@@ -138,9 +137,4 @@ def test_pooled_segments_match_reference_on_the_stacked_windows():
     fast = correlations.PooledCorrelations([LagCorrelations(terms, p, n0) for p in pieces])
     ref = DataCorrelations(np.vstack([evaluate_terms(terms, p, n0) for p in pieces]),
                            np.concatenate([p["y"][n0:] for p in pieces]))
-    scale = float(np.max(np.abs(ref.diag))) + ref.y_mean_sq
-    assert fast.n_samples == ref.n_samples
-    for name in ("y_mean", "y_mean_sq", "means", "target", "diag"):
-        _assert_close(getattr(fast, name), getattr(ref, name), scale)
-    for j in range(len(terms)):
-        _assert_close(fast.column(j), ref.column(j), scale)
+    _assert_matches(fast, ref)
