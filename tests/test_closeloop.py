@@ -86,10 +86,10 @@ def test_a_level_is_rejected_where_there_is_no_slow_error():
     y = lfilter([1.0], [1.0, -0.6, 0.1], rng.standard_normal(60_000)) * 0.3
     config = LoopConfig(rate=100.0, level_taus=(0.5, 2.0, 8.0))
     # the slow tests are what offer a level: force the offer by judging it directly
-    from fosmodel.loop.closeloop import _Fitter, _Judge, _segments
+    from fosmodel.loop.closeloop import _Fitter, _Judge, loop_split
     from fosmodel.loop.effects import Effect
 
-    segments = _segments(len(y), config)
+    segments = loop_split(len(y), config)
     fitter = _Fitter(y, {}, segments, config)
     family = CandidateFamily(config.max_lag)
     current = fitter.fit(family)

@@ -138,3 +138,14 @@ def test_bad_input_is_refused_in_one_line(record):
     with pytest.raises(InputError, match=r"^the columns differ in length: gx_dps 60000, "
                                          r"gy_dps 59999, "):
         run_imu(short, axes, record.rate)
+
+
+def test_a_loop_split_too_short_is_refused_before_any_work(record, monkeypatch):
+    import fosmodel.workflows.imu as workflow
+
+    monkeypatch.setattr(workflow, "imu_noise", lambda *a, **k: pytest.fail("Allan ran"))
+    axes = resolve_axes(list(record.columns))[:1]
+    with pytest.raises(InputError, match=r"^the record \(60000 samples, 600 s at 100 Hz\) is too "
+                                         r"short for the split 0.5 / 0.45: "):
+        run_imu(record.columns, axes, record.rate,
+                config=ImuConfig(**SMALL, loop_split=(0.5, 0.45), n_jobs=1))

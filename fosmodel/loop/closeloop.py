@@ -258,7 +258,7 @@ def close_loop(
     say = progress or (lambda _: None)
     y = as_signal(y, "the record")
     channels = as_channels(channels, list(channels or {}), len(y))
-    segments = _segments(len(y), config)
+    segments = loop_split(len(y), config)
     fitter = _Fitter(y, channels, segments, config)
     taus = config.level_taus if config.level_taus is not None else levels_for(
         y[segments.train], config.rate)
@@ -325,13 +325,20 @@ def score_family(
     """
     y = as_signal(y, "the record")
     channels = as_channels(channels, list(channels or {}), len(y))
-    segments = _segments(len(y), config)
+    segments = loop_split(len(y), config)
     model = _Fitter(y, channels, segments, config).fit(family)
     return _metrics(model, y, segments.predict, config)
 
 
-def _segments(n: int, config: LoopConfig) -> Split:
-    """Split ``n`` samples by ``config``'s fractions, each segment long enough."""
+def loop_split(n: int, config: LoopConfig) -> Split:
+    """Split ``n`` samples by ``config``'s fractions into the loop's three segments.
+
+    Raises
+    ------
+    InputError
+        If a segment is too short for the fit, the evaluation's outages or the prediction's
+        outage and bias windows.
+    """
     a, b = round(config.train * n), round((config.train + config.evaluate) * n)
     need_eval = 3 * round(config.eval_horizon_s * config.rate)
     need_pred = max(round(config.horizon_s * config.rate) + 1,

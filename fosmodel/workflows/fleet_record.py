@@ -31,7 +31,7 @@ from ..loop.closeloop import LoopResult, close_loop
 from ..loop.loop_report import write_loop_report
 from ..noise.axes import Axis, UnitsSpec
 from ..noise.imu_noise import ImuNoise, imu_noise, write_imu_noise
-from ..study.harness import StudyResult, study_split
+from ..study.harness import StudyResult
 from ..study.report import write_study
 from ..study.runner import run_study
 from .imu import STEPS, AxisResult, ImuConfig, ImuResult, loop_row, study_row
@@ -160,11 +160,7 @@ def _steps(rec: Record, axes: list[Axis], aux: dict[str, np.ndarray],
         imu = replace(imu, train_s=train_s, evaluate_s=evaluate_s)
     if config.loop_split is not None:
         imu = replace(imu, loop_split=config.loop_split.fractions(n, rate))
-    for a in axes:  # refuse a split or units the steps cannot take before any work
-        if "study" in config.steps:
-            study_split(n, imu.study_config(rate, a))
-        if "loop" in config.steps:
-            imu.loop_config(rate, a)
+    imu.check(n, rate, axes, config.steps)
     columns = {a.column: rec.column(a.column) for a in axes}
     channels = {**columns, **aux}
     out = _Outcome(rec, axes, aux, imu)

@@ -26,7 +26,7 @@ from ..core.exceptions import InputError
 from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_covariance
 from ..filter.statespace import StateSpace
 from ..io.record import Record
-from ..loop.closeloop import LoopConfig, LoopResult, close_loop
+from ..loop.closeloop import LoopConfig, LoopResult, close_loop, loop_split
 from ..noise.axes import Axis, UnitsSpec, infer_axis, resolve_axes
 from ..noise.imu_noise import ImuNoise, imu_noise
 from ..study.harness import METHODS, StudyConfig, StudyResult, study_split
@@ -80,6 +80,24 @@ class ImuConfig:
                            degrees=self.degrees, methods=self.methods, protocols=self.protocols,
                            train_s=self.train_s, evaluate_s=self.evaluate_s,
                            horizon_s=self.horizon_s, n_starts=self.n_starts)
+
+    def check(self, n: int, rate: float, axes: Sequence[Axis],
+              steps: Sequence[str] = STEPS) -> None:
+        """Refuse, before any work, a record the steps cannot split or units they cannot take.
+
+        ``n`` is the record's length in samples; ``steps`` are those that will run.
+
+        Raises
+        ------
+        InputError
+            From :func:`fosmodel.study.harness.study_split`,
+            :func:`fosmodel.loop.closeloop.loop_split` or the configurations.
+        """
+        for axis in axes:
+            if "study" in steps:
+                study_split(n, self.study_config(rate, axis))
+            if "loop" in steps:
+                loop_split(n, self.loop_config(rate, axis))
 
     def loop_config(self, rate: float, axis: Axis) -> LoopConfig:
         """Configure the residual loop of one axis."""
@@ -220,15 +238,13 @@ def run_imu(
     ------
     InputError
         No axis, an axis missing from ``columns``, columns of unequal length, or a record
-        too short for the study's split (before any work).
+        too short for the study's or the loop's split (before any work).
     """
     config = config or ImuConfig()
     say = progress or (lambda line: None)
     _check(columns, axes, aux or {})
     n = len(columns[axes[0].column])
-    for axis in axes:  # refuse a bad split or unit before any work
-        study_split(n, config.study_config(rate, axis))
-        config.loop_config(rate, axis)
+    config.check(n, rate, axes)
     start = time.perf_counter()
     noise = imu_noise(columns, axes, rate, source, min_tau=config.min_tau)
     allan_s = time.perf_counter() - start
