@@ -23,13 +23,11 @@ worker processes (2 by default).
 from __future__ import annotations
 
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from doc_pages import README, replace_section, show_figure
-from joblib import Parallel, delayed
 
 from fosmodel.io.loader import Record, load_record
 from fosmodel.io.samples import load_mpu6050_static
@@ -42,6 +40,7 @@ from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
 from fosmodel.study.harness import StudyConfig, StudyResult
 from fosmodel.study.report import paper_table, write_study
 from fosmodel.study.runner import run_study
+from fosmodel.workflows.imu import in_workers
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
@@ -105,14 +104,6 @@ def study_row(record: str, axis: str, result: StudyResult) -> dict:
     return out
 
 
-def _in_workers(task, items: list[tuple]) -> Iterator:
-    """``task(*item)`` for every item on ``JOBS`` worker processes, the results in order as
-    they come (the records' columns are memory-mapped to the workers, not copied)."""
-    if JOBS == 1:
-        return (task(*item) for item in items)
-    return Parallel(n_jobs=JOBS, return_as="generator")(delayed(task)(*item) for item in items)
-
-
 def _study(name: str, axis: str, y: np.ndarray, rate: float, sensor: str,
            units: str) -> StudyResult:
     """One axis's study, its report written by the worker that ran it."""
@@ -125,7 +116,7 @@ def run_studies(recs) -> tuple[pd.DataFrame, dict]:
     items = [(name, axis, rec.column(axis), rec.rate, sensor, units)
              for name, (rec, axes) in recs.items() for axis, (sensor, units) in axes.items()]
     rows, kept = [], {}
-    for (name, axis, *_), result in zip(items, _in_workers(_study, items)):
+    for (name, axis, *_), result in zip(items, in_workers(((_study, i) for i in items), JOBS)):
         rows.append(study_row(name, axis, result))
         kept[(name, axis)] = result
         print(f"study: {name} {axis} done", flush=True)
@@ -237,7 +228,7 @@ def run_loops(recs, mtig_keep: Record, mtig_clip: Record) -> tuple[pd.DataFrame,
               rec.rate, sensor, units)
              for name, rec, axes in targets for axis, (sensor, units) in axes.items()]
     rows, results = [], {}
-    for (name, axis, *_), res in zip(items, _in_workers(_loop, items)):
+    for (name, axis, *_), res in zip(items, in_workers(((_loop, i) for i in items), JOBS)):
         rows.append(loop_row(name, axis, res))
         results[(name, axis)] = res
         print(f"loop: {name} {axis}: {rows[-1]['Effects kept']}", flush=True)

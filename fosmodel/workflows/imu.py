@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -291,17 +291,27 @@ def _task(step: str, column: str, channels: Mapping[str, np.ndarray], axis: Axis
 def _run_tasks(channels: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: float,
                config: ImuConfig) -> Iterator[tuple[tuple[str, str], Any, float]]:
     """Run the study and the loop of every axis, longest first; yield them as they end."""
-    tasks = [(step, a.column, channels, a, rate, config) for step in ("loop", "study")
+    tasks = [(_task, (step, a.column, channels, a, rate, config)) for step in ("loop", "study")
              for a in axes]
-    if config.n_jobs == 1:
-        yield from (_task(*t) for t in tasks)
+    yield from in_workers(tasks, config.n_jobs, ordered=False)
+
+
+def in_workers(calls: Iterable[tuple[Callable[..., Any], tuple]], n_jobs: int,
+               ordered: bool = True) -> Iterator[Any]:
+    """Yield ``function(*args)`` of every call, ``n_jobs`` at a time in worker processes.
+
+    ``n_jobs`` 1 runs them here, one after the other.  The results come in the calls' order,
+    or as they end when not ``ordered`` (a result then says what it is).  Each worker gets
+    one BLAS thread (joblib's default for as many processes as cores), and large arrays are
+    memory-mapped to the workers, not copied per call.
+    """
+    if n_jobs == 1:
+        yield from (function(*args) for function, args in calls)
         return
     from joblib import Parallel, delayed
 
-    # each worker gets one BLAS thread (joblib's default for n_jobs processes on as many
-    # cores); the signals are memory-mapped to the workers, not copied per task
-    run = Parallel(n_jobs=config.n_jobs, return_as="generator_unordered")
-    yield from run(delayed(_task)(*t) for t in tasks)
+    run = Parallel(n_jobs=n_jobs, return_as="generator" if ordered else "generator_unordered")
+    yield from run(delayed(function)(*args) for function, args in calls)
 
 
 def _brief(step: str, outcome: StudyResult | LoopResult) -> str:

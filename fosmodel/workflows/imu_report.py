@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import json
 import textwrap
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
@@ -30,7 +30,7 @@ from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
 from ..models.summary import markdown_table
 from ..noise.imu_noise import write_imu_noise
 from ..study.report import write_study
-from .imu import AxisResult, ImuResult
+from .imu import AxisResult, ImuResult, in_workers
 
 
 def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]:
@@ -51,7 +51,7 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
     """
     tables = write_imu_tables(result, out_dir, title)
     paths = [out_dir / f"{stem}.{ext}" for stem in tables for ext in ("md", "csv", "tex")]
-    for part in _in_parallel(_parts(result, out_dir, title), result.config.n_jobs):
+    for part in in_workers(_parts(result, out_dir, title), result.config.n_jobs):
         paths += part
     models = [_write_model(result, a, _mkdir(out_dir / "models")) for a in result.axes]
     filter_path = _mkdir(out_dir / "filter") / "allan_model.json"
@@ -97,14 +97,6 @@ def _parts(result: ImuResult, out_dir: Path, title: str) -> list[tuple[Callable,
                   (write_loop_report, (a.loop, out_dir / "loop" / a.axis.column,
                                        f"{title} {a.axis.column}"))]
     return parts
-
-
-def _in_parallel(parts: list[tuple[Callable, tuple]], n_jobs: int) -> Iterable[list[Path]]:
-    if n_jobs == 1:
-        return [write(*args) for write, args in parts]
-    from joblib import Parallel, delayed
-
-    return Parallel(n_jobs=n_jobs)(delayed(write)(*args) for write, args in parts)
 
 
 def _mkdir(path: Path) -> Path:
