@@ -439,3 +439,71 @@ def test_a_short_row_is_refused_when_reading_some_columns(tmp_path):
     path.write_text("time,gx,temp\n0,1,20\n0.01,21\n0.02,3,20\n")  # gx or temp missing on line 3
     with pytest.raises(InputError, match=r"column 'temp', line 3: an empty cell or a row shorter"):
         loader.load_record(path, columns=["gx"])
+
+
+@pytest.mark.parametrize("name", ["w.npy", "w.parquet"])
+def test_a_record_over_the_memory_budget_is_refused_at_its_first_block(tmp_path, monkeypatch,
+                                                                        name):
+    _wide(tmp_path)
+    monkeypatch.setattr(loader, "CHUNK_ROWS", 100)
+    monkeypatch.setenv("FOSMODEL_MAX_MEMORY", "20000")
+    converted = []
+    real = loader._numeric
+    monkeypatch.setattr(loader, "_numeric", lambda *a: converted.append(a[2]) or real(*a))
+    width = 6 if name == "w.npy" else 7
+    with pytest.raises(InputError, match=rf"^{tmp_path / name}: too large to read: 1,000 rows of "
+                       rf"{width} column\(s\) take 0.0 GiB as float64, more than the 0.0 GiB "
+                       r"this machine has free; read fewer columns \(--column\) or a shorter "
+                       r"stretch$"):
+        load_record(tmp_path / name, rate=100.0 if name == "w.npy" else None)
+    assert len(converted) == width  # the first block's columns, no more
+
+
+def test_a_csv_over_the_memory_budget_is_refused_as_it_grows(tmp_path, monkeypatch):
+    _wide(tmp_path)
+    monkeypatch.setattr(loader, "CHUNK_ROWS", 100)
+    monkeypatch.setenv("FOSMODEL_MAX_MEMORY", str(300 * 8 * 7))
+    with pytest.raises(InputError, match=r"too large to read: 400 rows of 7 column\(s\) already "
+                       "take"):
+        load_record(tmp_path / "w.csv")
+
+
+def test_parquet_with_a_null_or_text_column_goes_through_pandas(tmp_path):
+    frame = pd.DataFrame({"time": [0.0, 0.01, 0.02], "gx": [1.0, None, 3.0]})
+    frame.to_parquet(tmp_path / "null.parquet")
+    with pytest.raises(InputError, match=r"column 'gx', row 1: an empty cell or NaN"):
+        load_record(tmp_path / "null.parquet")
+    frame = pd.DataFrame({"time": [0.0, 0.01, 0.02], "gx": ["1", "2.5", "x"]})
+    frame.to_parquet(tmp_path / "text.parquet")
+    with pytest.raises(InputError, match=r"column 'gx', row 2: 'x' is not a number"):
+        load_record(tmp_path / "text.parquet")
+
+
+@pytest.mark.parametrize("name", ["t.npy", "t.parquet"])
+def test_time_going_backwards_across_blocks_is_named(tmp_path, monkeypatch, name):
+    time = np.arange(300) / 100.0
+    time[128] = time[126]  # the first row of the third 64-row block goes back
+    frame = pd.DataFrame({"time": time, "gx": np.ones(300)})
+    frame.to_parquet(tmp_path / "t.parquet")
+    np.save(tmp_path / "t.npy", frame.to_records(index=False))
+    monkeypatch.setattr(loader, "CHUNK_ROWS", 64)
+    with pytest.raises(InputError, match=r"column 'time', row 128: time goes backwards "
+                       r"\(1.27 then 1.26\)"):
+        load_record(tmp_path / name)
+
+
+def test_structured_npy_equals_its_fields(tmp_path, monkeypatch):
+    frame = _wide(tmp_path)
+    np.save(tmp_path / "s.npy", frame.to_records(index=False))
+    monkeypatch.setattr(loader, "CHUNK_ROWS", 64)
+    record = load_record(tmp_path / "s.npy")
+    np.testing.assert_array_equal(record.time, frame["time"].to_numpy())
+    for c in record.names:
+        np.testing.assert_array_equal(record.column(c), frame[c].to_numpy())
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_tenths_equal_numpy_histogram(seed):
+    rng = np.random.default_rng(seed)
+    time = np.sort(np.concatenate([rng.uniform(0, 7, 500), np.linspace(0, 7, 11)]))  # edges too
+    np.testing.assert_array_equal(loader._tenths(time), np.histogram(time, bins=10)[0])
