@@ -60,11 +60,16 @@ class Split:
         InputError
             If a segment is empty.
         """
-        a, b = round(train * n), round((train + evaluate) * n)
+        a, b = cls.fraction_bounds(n, train, evaluate)
         if a < 1 or b <= a or b >= n:
             raise InputError(f"the split {train:g} / {evaluate:g} of {n} samples leaves an empty "
                              "segment")
         return cls(slice(0, a), slice(a, b), slice(b, n))
+
+    @staticmethod
+    def fraction_bounds(n: int, train: float, evaluate: float) -> tuple[int, int]:
+        """Return where the evaluation and the prediction segments of :meth:`by_fraction` start."""
+        return round(train * n), round((train + evaluate) * n)
 
     def items(self) -> list[tuple[str, slice]]:
         """``("train", slice)``, ``("evaluate", ...)``, ``("predict", ...)``, in order."""

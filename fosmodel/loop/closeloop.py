@@ -281,16 +281,8 @@ def close_loop(
         if not candidates:
             break
         say(f"round {len(steps) + 1}: {len(candidates)} effect(s) to try")
-        judge = _Judge(fitter, current, y, segments, config)
-        trials = []
-        for i, effect in enumerate(candidates, 1):
-            clock = time.perf_counter()
-            trial_family = family.add(effect, channels, len(y), config.rate, segments.train)
-            trial = fitter.fit(trial_family)
-            trials.append((effect, trial_family, trial, judge(trial, effect)))
-            say(f"  [{i}/{len(candidates)}] {effect.describe()}: "
-                f"{_verdict_text(trials[-1][3])} ({time.perf_counter() - clock:.1f} s)")
-        kept, waiting = _screen(trials, judge)
+        trials, kept, waiting = _round(fitter, current, family, candidates, channels, y,
+                                       segments, config, say)
         for effect, _, _, comparison in trials:
             if not any(k[0] is effect for k in kept):
                 rejected.append({"effect": effect.describe(), "kind": effect.kind,
@@ -312,6 +304,27 @@ def close_loop(
                       _metrics(current, y, segments.predict, config), steps, rejected,
                       findings_before, findings, base, current, residual_before,
                       _residual(current, y, segments), tuple(taus))
+
+
+def _round(fitter: _Fitter, current: BoundModel, family: CandidateFamily,
+           candidates: list[Effect], channels: Mapping[str, np.ndarray], y: np.ndarray,
+           segments: Split, config: LoopConfig,
+           say: Progress) -> tuple[list[tuple], list[tuple], list[Effect]]:
+    """Fit and judge each candidate on top of ``current``: the trials, those kept, those waiting.
+
+    The judge's forecasts from every origin (a few record-long arrays) live for the round only.
+    """
+    judge = _Judge(fitter, current, y, segments, config)
+    trials = []
+    for i, effect in enumerate(candidates, 1):
+        clock = time.perf_counter()
+        trial_family = family.add(effect, channels, len(y), config.rate, segments.train)
+        trial = fitter.fit(trial_family)
+        trials.append((effect, trial_family, trial, judge(trial, effect)))
+        say(f"  [{i}/{len(candidates)}] {effect.describe()}: "
+            f"{_verdict_text(trials[-1][3])} ({time.perf_counter() - clock:.1f} s)")
+    kept, waiting = _screen(trials, judge)
+    return trials, kept, waiting
 
 
 def score_family(
@@ -339,7 +352,7 @@ def loop_split(n: int, config: LoopConfig) -> Split:
         If a segment is too short for the fit, the evaluation's outages or the prediction's
         outage and bias windows.
     """
-    a, b = round(config.train * n), round((config.train + config.evaluate) * n)
+    a, b = Split.fraction_bounds(n, config.train, config.evaluate)
     need_eval = 3 * round(config.eval_horizon_s * config.rate)
     need_pred = max(round(config.horizon_s * config.rate) + 1,
                     2 * round(max(config.taus) * config.rate))
