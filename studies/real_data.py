@@ -58,13 +58,19 @@ SUNSIDED_FILE = "unmoved-with-x-pointing-forward-10min.csv.gz"
 
 
 def records() -> dict[str, tuple[Record, dict]]:
-    """Every record of the study with the units of its axes."""
-    out = {f"ADIS16405 imu{k}": (load_record(DATA / "adis16405" / f"imu{k}.csv.gz", rate=100),
-                                 ADIS) for k in range(1, 7)}
-    out["MPU-6050 sunsided"] = (load_record(DATA / "mpu6050_sunsided" / SUNSIDED_FILE,
-                                            uniform=True), SUNSIDED)
+    """Every record of the study with the units of its axes (read on the workers)."""
+    reads = {f"ADIS16405 imu{k}": ((DATA / "adis16405" / f"imu{k}.csv.gz",), {"rate": 100},
+                                   ADIS) for k in range(1, 7)}
+    reads["MPU-6050 sunsided"] = ((DATA / "mpu6050_sunsided" / SUNSIDED_FILE,),
+                                  {"uniform": True}, SUNSIDED)
+    loaded = in_workers(((_read, (args, options)) for args, options, _ in reads.values()), JOBS)
+    out = {name: (rec, axes) for (name, (*_, axes)), rec in zip(reads.items(), loaded)}
     out["MPU-6050 tomisuarez2"] = (load_mpu6050_static(), TOMI)
     return out
+
+
+def _read(args: tuple, options: dict) -> Record:
+    return load_record(*args, **options)
 
 
 def slug(name: str) -> str:
@@ -151,17 +157,24 @@ def allan_row(name: str, axis: str, res, fit) -> dict:
 
 def run_allan(recs, mtig: Record) -> pd.DataFrame:
     """Every record's axes in one Allan run each (table, figures, Kalibr/MATLAB/JSON files)."""
-    rows = []
     items = [(name, rec, axes) for name, (rec, axes) in recs.items()]
     items.append(("MTi-G", mtig, {"gyro_x": ("gyro", "rad/s")}))
-    for name, rec, units in items:
-        axes = [Axis(column, sensor, unit, "given") for column, (sensor, unit) in units.items()]
-        noise = imu_noise({a.column: rec.column(a.column) for a in axes}, axes, rec.rate,
-                          rec.source)
-        write_imu_noise(noise, OUT / "allan" / slug(name), name)
-        rows += [allan_row(name, a.axis.column, a.result, a.fit) for a in noise.axes]
+    calls = ((_allan, (name, {c: rec.column(c) for c in units}, rec.rate, rec.source, units))
+             for name, rec, units in items)
+    rows = []
+    for (name, *_), found in zip(items, in_workers(calls, JOBS)):
+        rows += found
         print(f"allan: {name} done", flush=True)
     return pd.DataFrame(rows)
+
+
+def _allan(name: str, columns: dict[str, np.ndarray], rate: float, source: str,
+           units: dict[str, tuple[str, str]]) -> list[dict]:
+    """One record's Allan run, its files written by the worker that ran it."""
+    axes = [Axis(column, sensor, unit, "given") for column, (sensor, unit) in units.items()]
+    noise = imu_noise(columns, axes, rate, source)
+    write_imu_noise(noise, OUT / "allan" / slug(name), name)
+    return [allan_row(name, a.axis.column, a.result, a.fit) for a in noise.axes]
 
 
 def allan_lines(allan: pd.DataFrame) -> list[str]:
