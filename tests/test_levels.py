@@ -187,3 +187,37 @@ def test_level_grid_spans_below_the_allan_floor():
     assert grid[0] == pytest.approx(10.0, rel=1e-3)
     assert level_grid(200_000, RATE)[-1] == 100.0  # no floor: a twentieth of the record
     assert level_grid(100, RATE) == ()  # too short for a level of 10 samples
+
+
+@pytest.mark.parametrize("start", [0, 777])
+@pytest.mark.parametrize("as_series", [False, True])
+def test_a_long_prediction_in_blocks_equals_the_one_pass(monkeypatch, start, as_series):
+    import pandas as pd
+
+    from fosmodel.models import model as model_module
+
+    y, temp = _record(6000)
+    sine = {"sin@0.7Hz": np.sin(2 * np.pi * 0.7 * np.arange(len(y)) / RATE)}
+    fit = FOSModel(max_lag=4, degree=2, levels=[0.5, 5.0], rate=RATE, exog_lags={"temp": 2},
+                   columns=list(sine), max_terms=12, stop="max_terms")
+    fit.fit(y, {"temp": temp, **sine})  # levels, products, temp and their products
+    assert any("level" in t for t in fit.terms_) and any("*temp" in t for t in fit.terms_)
+    exog = {"temp": temp, **sine, **{level_name(t): level_series(y, t, RATE) for t in (0.5, 5.0)}}
+    assert fit._blockable(exog, len(y)) and not fit._blockable({"temp": temp}, len(y))
+    whole = fit.predict(y, exog, start=start)
+    monkeypatch.setattr(model_module, "_PREDICT_ROWS", 1000)  # 6 blocks, the last one short
+    y_in = pd.Series(y, index=np.arange(len(y)) + 5) if as_series else y
+    blocks = fit.predict(y_in, exog, start=start)
+    np.testing.assert_array_equal(np.asarray(blocks), whole)
+    assert isinstance(blocks, pd.Series) == as_series
+    np.testing.assert_array_equal(fit.predict(y, {"temp": temp}, start=start), whole)
+
+
+def test_a_channel_of_another_length_is_named_in_a_long_prediction(monkeypatch):
+    from fosmodel.models import model as model_module
+
+    y, temp = _record(3000)
+    fit = FOSModel(max_lag=3, exog_lags={"temp": 1}).fit(y, {"temp": temp})
+    monkeypatch.setattr(model_module, "_PREDICT_ROWS", 500)
+    with pytest.raises(InputError, match="channel 'temp' has 2999 samples, the output has 3000"):
+        fit.predict(y, {"temp": temp[:-1]})

@@ -74,6 +74,7 @@ FORMAT_VERSION = 2
 _ADDED_IN = {2: {"coef_se": lambda n_terms: [math.nan] * n_terms,
                  "intercept_se": lambda n_terms: math.nan}}
 _BYTES_PER_VALUE = 8
+_PREDICT_ROWS = 2**20  # samples predicted at a time in a long record
 #: The channels and columns of a record, by name: a dict of arrays or a DataFrame.
 Exog: TypeAlias = Mapping[str, ArrayLike] | pd.DataFrame
 
@@ -494,6 +495,9 @@ class FOSModel(BaseEstimator):
             signals = self._signals(y, exog, levels=False)
             runs, lo = _usable(segments, len(signals[OUTPUT]), n0), 0
         else:
+            n = len(as_signal(y, "y"))
+            if n - start > _PREDICT_ROWS and self._blockable(exog, n):
+                return _as_input_type(self._predict_blocks(y, exog, int(start), n), y)
             lo = max(int(start) - n0, 0)
             signals = self._signals_from(y, exog, lo)
             runs = _usable(None, len(signals[OUTPUT]), n0)
@@ -504,9 +508,37 @@ class FOSModel(BaseEstimator):
             values = evaluate_sum(self._terms, self.coef_, piece, n0)
             out[lo + run.start + n0 : lo + run.stop] = (values + self.intercept_
                                                         + self.offsets_[OUTPUT])
-        if isinstance(y, pd.Series):
-            return pd.Series(out, index=y.index, name="prediction")
+        return _as_input_type(out, y)
+
+    def _predict_blocks(self, y: ArrayLike, exog: Exog | None, start: int,
+                        n: int) -> np.ndarray:
+        """:meth:`predict` of a long record ``_PREDICT_ROWS`` samples at a time.
+
+        Each block is predicted from the record up to its end, so it holds copies of
+        one block's signals, not of the record's; every sample is computed as in one
+        pass (the same products and sums), so the predictions are the same.
+        """
+        y_arr = np.asarray(y, dtype=float)
+        columns = {k: np.asarray(v) for k, v in exog.items()} if exog is not None else None
+        out = np.full(n, np.nan)
+        for lo in range(start, n, _PREDICT_ROWS):
+            hi = min(lo + _PREDICT_ROWS, n)
+            cut = {k: v[:hi] for k, v in columns.items()} if columns is not None else None
+            out[lo:hi] = self.predict(y_arr[:hi], cut, start=lo)[lo:]
         return out
+
+    def _blockable(self, exog: Exog | None, n: int) -> bool:
+        """Whether a prediction of ``n`` samples can go block by block.
+
+        Not when a level or a derived column is not given in ``exog`` (each block would
+        compute it over the record's whole past again), nor when a channel is not ``n``
+        long (the one-pass path names it).
+        """
+        given = {str(k): np.asarray(v) for k, v in exog.items()} if exog is not None else {}
+        names = [*self.spec_.level_names, *(c for c in [*self.spec_.exog_lags,
+                                                       *self.spec_.columns] if is_derived(c))]
+        return (all(name in given for name in names)
+                and all(v.shape == (n,) for v in given.values()))
 
     def residuals(self, y: ArrayLike, exog: Exog | None = None) -> np.ndarray | pd.Series:
         """Return ``y`` minus its one-step prediction (NaN over the lag window)."""
@@ -815,6 +847,13 @@ def _older_state(version: int, fitted: Mapping[str, object], n_terms: int) -> di
     """Return the fitted state a file of format ``version`` lacks, as it reads there."""
     return {name: default(n_terms) for added, names in _ADDED_IN.items() if version < added
             for name, default in names.items() if name not in fitted}
+
+
+def _as_input_type(prediction: np.ndarray, y: ArrayLike) -> np.ndarray | pd.Series:
+    """Return the prediction as a Series with ``y``'s index when ``y`` is one."""
+    if isinstance(y, pd.Series):
+        return pd.Series(prediction, index=y.index, name="prediction")
+    return prediction
 
 
 def _cut(exog: Exog | None, names: Sequence[str], n: int, lo: int) -> Exog | None:
