@@ -61,6 +61,27 @@ def test_refine_frequency_is_the_fos_choice_between_bins():
     assert f == pytest.approx(grid[first // 16], abs=1e-12)
 
 
+@pytest.mark.parametrize("block", [1000, 4096, 2**20])  # a short last block; one pass
+def test_zoom_sums_by_blocks_equal_the_point_by_point_sums(monkeypatch, block):
+    n = 20_011
+    x = 0.2 * np.cos(2 * np.pi * 7.3137 * _time(n)) + _white(n, 3)
+    grid = 7.3 + np.arange(-1, 1.01, 0.1) * RATE / n
+    monkeypatch.setattr(dg, "ZOOM_BLOCK", block)
+    direct = np.exp(-2j * np.pi * np.outer(grid, np.arange(n)) / RATE) @ x
+    np.testing.assert_allclose(dg._zoom(x, grid, RATE), direct, rtol=0,
+                               atol=1e-10 * np.abs(direct).max())  # phases of ~1e4 rad
+
+
+def test_refine_frequency_by_blocks_makes_the_same_choice(monkeypatch):
+    n = 20000
+    t = _time(n) + 3.0  # a record that does not start at 0
+    x = 0.2 * np.cos(2 * np.pi * 7.3137 * t + 0.7) + 0.5 * _white(n, 1)
+    f0 = round(7.3137 * n / RATE) * RATE / n
+    whole = dg.refine_frequency(x, t, f0, RATE)
+    monkeypatch.setattr(dg, "ZOOM_BLOCK", 3000)
+    assert dg.refine_frequency(x, t, f0, RATE) == whole
+
+
 def test_periodic_finds_an_off_grid_sinusoid_and_stays_quiet_on_white_noise():
     n = 20000
     t = _time(n)

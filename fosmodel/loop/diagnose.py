@@ -31,7 +31,7 @@ import allantools
 import numpy as np
 from scipy import stats
 from scipy.ndimage import median_filter
-from scipy.signal import zoom_fft
+from scipy.signal import ZoomFFT, zoom_fft
 
 from ..core.fos import StopRule, fos_search
 
@@ -39,6 +39,7 @@ ALPHA = 1e-3
 # Records over BLOCKED_ROWS have the nonlinearity test's Gram matrix accumulated over blocks of
 # BLOCK rows; shorter ones build the matrix of products as before (bit-identical results).
 BLOCKED_ROWS = 2**21
+ZOOM_BLOCK = 2**20  # samples per chirp z-transform of a long residual (refine_frequency)
 BLOCK = 2**16
 
 
@@ -186,8 +187,7 @@ def refine_frequency(
     grid = grid[(grid > 0) & (grid < rate / 2)]
     xc = x - x.mean()
     # sum_n x e^{i w t_n} = e^{i w t_0} conj(sum_n x e^{-2 pi i f n / rate}) for real x
-    zoom = zoom_fft(xc, [grid[0], grid[-1]], m=len(grid), fs=rate, endpoint=True)
-    sums = np.exp(2j * np.pi * grid * time[0]) * np.conj(zoom)
+    sums = np.exp(2j * np.pi * grid * time[0]) * np.conj(_zoom(xc, grid, rate))
     phi = np.arange(phases) * np.pi / phases
     omega = np.repeat(2 * np.pi * grid, phases)
     phase = np.tile(phi, len(grid))
@@ -197,6 +197,28 @@ def refine_frequency(
                                  float(xc @ xc) / n)
     res = fos_search(corr, StopRule("max_terms", max_terms=1), intercept=True)
     return float(omega[res.support[0]] / (2 * np.pi)) if len(res.support) else f0
+
+
+def _zoom(x: np.ndarray, grid: np.ndarray, rate: float) -> np.ndarray:
+    """``sum_n x[n] exp(-2 pi i f n / rate)`` at each ``f`` of the evenly spaced ``grid``.
+
+    One chirp z-transform of the record, or of ``ZOOM_BLOCK`` samples at a time
+    when it is longer, each block's sums turned by its start's phase: the
+    transform of a whole long record takes several arrays of its length, and
+    scipy keeps the FFT plan of every length it has seen (a day's residual
+    would leave hundreds of megabytes behind).  The same sums, to rounding.
+    """
+    band, m = [grid[0], grid[-1]], len(grid)
+    if len(x) <= ZOOM_BLOCK:
+        return zoom_fft(x, band, m=m, fs=rate, endpoint=True)
+    transform = ZoomFFT(ZOOM_BLOCK, band, m=m, fs=rate, endpoint=True)
+    total = np.zeros(m, dtype=complex)
+    for start in range(0, len(x), ZOOM_BLOCK):
+        block = x[start : start + ZOOM_BLOCK]
+        if len(block) < ZOOM_BLOCK:  # zeros add nothing to the sums
+            block = np.r_[block, np.zeros(ZOOM_BLOCK - len(block))]
+        total += np.exp(-2j * np.pi * grid * start / rate) * transform(block)
+    return total
 
 
 def _exp_sum(omega: np.ndarray, t0: float, dt: float, n: int) -> np.ndarray:
