@@ -592,14 +592,18 @@ class _Diagnostics:
             if n0 not in self._aux:
                 self._aux[n0] = AuxChannels({k: v[n0:stop] for k, v in self.channels.items()})
             findings += aux_correlation(r, self._aux[n0], config.aux_max_lag, alpha=config.alpha)
-        q = config.nonlinear_lags
-        if n0 >= q:
-            lagged = np.column_stack([self.y[n0 - k : stop - k] for k in range(1, q + 1)])
-            findings.append(nonlinearity(fast, _fast(lagged, rate, config.slow_s),
-                                         alpha=config.alpha))
+        if n0 >= config.nonlinear_lags:
+            findings.append(self._nonlinearity(fast, n0))
         findings += [trend(r, t, alpha=config.alpha), change_point(r, t, alpha=config.alpha),
                      allan(r, rate, alpha=config.alpha)]
         return findings
+
+    def _nonlinearity(self, fast: np.ndarray, n0: int) -> Finding:
+        """Test the residual for products of the fast parts of the lagged outputs."""
+        config, stop = self.config, self.stop
+        lagged = np.column_stack([self.y[n0 - k : stop - k]
+                                  for k in range(1, config.nonlinear_lags + 1)])
+        return nonlinearity(fast, _fast(lagged, config.rate, config.slow_s), alpha=config.alpha)
 
 
 def _choose(kept: list[tuple]) -> tuple:
