@@ -294,6 +294,7 @@ def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
         with atomic_write(path, "wb") as fh:
             fig.savefig(fh, format=ext, dpi=FIGURE_DPI)
         paths.append(path)
+        fig.set_layout_engine("none")  # laid out by the first save: the second keeps it
     return paths
 
 
