@@ -139,6 +139,8 @@ BUILDERS = {
     "time goes backwards": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.02,2\n0.01,3\n"),
     "gap in time without `--fill` or `--segments`":
         lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,2\n0.02,3\n0.5,4\n0.51,5\n"),
+    "gap in time with `study`, `close-loop`, `allan`, `imu` or `fleet`":
+        lambda tmp: _report("allan", tmp, _gappy(tmp)),
     "`--rate` disagreeing with the time column": lambda tmp: _fit(tmp, _record(), "--rate", "50"),
     "time column in nanoseconds": lambda tmp: _fit(tmp, "time,gx\n0,1\n1e7,2\n2e7,3\n"),
     "one sample and no `--rate`": lambda tmp: _fit(tmp, "time,gx\n0,1\n"),

@@ -507,3 +507,16 @@ def test_tenths_equal_numpy_histogram(seed):
     rng = np.random.default_rng(seed)
     time = np.sort(np.concatenate([rng.uniform(0, 7, 500), np.linspace(0, 7, 11)]))  # edges too
     np.testing.assert_array_equal(loader._tenths(time), np.histogram(time, bins=10)[0])
+
+
+@pytest.mark.parametrize("gaps, offered", [("refuse", " or --segments to fit on the pieces"),
+                                           ("contiguous", "")])
+def test_a_gap_is_refused_offering_what_the_caller_can_take(tmp_path, gaps, offered):
+    path = tmp_path / "gap.csv"
+    path.write_text("time,gx\n0,1\n0.01,2\n0.02,3\n0.5,4\n0.51,5\n")
+    message = (f"{path}: column 'time', line 5: a gap of 0.48 s where the sample interval is "
+               "0.01 s (1 gap(s) in the record); pass --fill to interpolate across them"
+               f"{offered}")
+    with pytest.raises(InputError) as err:
+        load_record(path, gaps=gaps)
+    assert str(err.value) == message

@@ -123,4 +123,4 @@ def add_loader_options(parser: argparse.ArgumentParser, contiguous: str | None =
                         help="topic of a log whose temperature becomes the column temperature, "
                              "interpolated onto the IMU samples (default: a bag's only "
                              "sensor_msgs/msg/Temperature topic)")
-    parser.set_defaults(gaps="refuse")
+    parser.set_defaults(gaps="contiguous" if contiguous else "refuse")

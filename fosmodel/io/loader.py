@@ -63,7 +63,8 @@ if TYPE_CHECKING:
 
 TIME_COLUMNS = ("time", "time_s", "t_s")
 OUTLIER_MODES = ("keep", "clip", "drop")
-GAP_MODES = ("refuse", "fill", "segments")
+GAP_MODES = ("refuse", "contiguous", "fill", "segments")
+_REFUSING = ("refuse", "contiguous")
 #: An outlier is farther than ``OUTLIER_K`` robust standard deviations from the column median.
 OUTLIER_K = 10.0
 _MAD_TO_SIGMA = 1.4826
@@ -146,11 +147,13 @@ def load_record(
         deviations (1.4826 MAD) from their column's median: report them only,
         clip them to that bound, or drop their rows (only from a record with a
         time column).  They are reported in ``Record.notes`` and ``Record.outliers``.
-    gaps : {"refuse", "fill", "segments"}, default "refuse"
+    gaps : {"refuse", "contiguous", "fill", "segments"}, default "refuse"
         What to do with gaps in a regular time column (intervals over 1.5 times
         the median one): refuse the record, fill them by linear interpolation
         onto the regular grid, or keep them and list the contiguous runs in
-        ``Record.segments`` (to fit on them).  Always reported.
+        ``Record.segments`` (to fit on them).  Always reported.  "contiguous"
+        refuses too, for a caller that needs a record without gaps: its
+        message offers filling, not segments.
     topic : str, optional
         The IMU topic of a log to read; may be left out when the log has one.
     temperature_topic : str, optional
@@ -212,7 +215,7 @@ def load_record(
     if time is not None:
         rate, time = _time_base(time, rate, given_by, uniform, src, time_name, first_line,
                                 notes, gaps)
-        if gaps != "refuse" and not uniform:
+        if gaps not in _REFUSING and not uniform:
             time, segments = _handle_gaps(data, time, gaps, src, time_name, first_line, notes)
     elif uniform:
         notes.append("--uniform has no effect: the record has no time column")
@@ -836,7 +839,7 @@ def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: boo
                gaps: str = "refuse") -> tuple[float, np.ndarray]:
     """Return the rate and time of a record with a time column, after checking the column.
 
-    With ``gaps`` other than "refuse" the gap check is left to :func:`_handle_gaps`
+    With ``gaps`` that do not refuse, the gap check is left to :func:`_handle_gaps`
     and the rate is the median interval's.
     """
     if len(time) < 2:
@@ -847,11 +850,11 @@ def _time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: boo
     step = median(dt)
     bursty = _is_bursty(time, dt, step)
     _check_order(time, dt, src, name, first_line, repeats_allowed=bursty)
-    if not (bursty or uniform or gaps != "refuse"):
-        _check_gaps(dt, step, src, name, first_line)
+    if not (bursty or uniform or gaps not in _REFUSING):
+        _check_gaps(dt, step, src, name, first_line, segments=gaps == "refuse")
     with np.errstate(over="ignore"):  # a span of a few subnormal seconds: checked below
         measured = (len(time) - 1) / (time[-1] - time[0])  # uniform: the span is the best one
-        if gaps != "refuse" and not (bursty or uniform):
+        if gaps not in _REFUSING and not (bursty or uniform):
             measured = 1.0 / step  # with gaps, the span would count them
     if not _RATE_RANGE[0] <= measured <= _RATE_RANGE[1]:
         raise InputError(f"{src}: column {name!r} gives a sample rate of {measured:.6g} Hz, "
@@ -945,14 +948,17 @@ def _check_order(time: np.ndarray, dt: np.ndarray, src: str, name: str, first_li
                          f"({float(time[i - 1])!r} then {float(time[i])!r})")
 
 
-def _check_gaps(dt: np.ndarray, step: float, src: str, name: str, first_line: int) -> None:
+def _check_gaps(dt: np.ndarray, step: float, src: str, name: str, first_line: int,
+                segments: bool) -> None:
+    """Refuse gaps; the message offers filling them, and fitting on the pieces if ``segments``."""
     gaps = np.flatnonzero(dt > 1.5 * step)
     if gaps.size:
         i = int(gaps[0]) + 1
         raise InputError(
             f"{src}: column {name!r}, {_where(i, first_line)}: a gap of {dt[gaps[0]]:.6g} s "
             f"where the sample interval is {step:.6g} s ({gaps.size} gap(s) in the record); "
-            "pass --fill to interpolate across them or --segments to fit on the pieces"
+            "pass --fill to interpolate across them"
+            + (" or --segments to fit on the pieces" if segments else "")
         )
 
 
