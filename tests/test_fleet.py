@@ -166,3 +166,17 @@ def test_a_split_too_long_for_a_record_is_refused_by_name(files, tmp_path):
         "leaves 3000 samples to predict, 6000 are needed (a 30 s outage horizon and two 30 s "
         "bias windows) (1 of 1 records failed)")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_full_report_of_a_record_has_every_axis_timed(files, tmp_path):
+    result = run_fleet(files[:1], tmp_path, FleetConfig(imu=SMALL, split=CONFIG.split,
+                                                        columns=("gx_dps", "ax_mps2"),
+                                                        reports=True))
+    report = tmp_path / "imu0" / "report"
+    assert {"noise", "study", "loop", "models", "filter"} <= {p.name for p in report.iterdir()}
+    timing = pd.read_csv(report / "timing.csv")
+    assert list(timing["axis"]) == ["gx_dps", "ax_mps2"]
+    assert (timing[["study (s)", "loop (s)"]] > 0).all().all()
+    marker = json.loads((tmp_path / "imu0" / MARKER).read_text())["seconds"]
+    assert marker["study"] == pytest.approx(timing["study (s)"].sum(), abs=0.02)
+    assert list(result.table["axis"]) == ["gx_dps", "ax_mps2"]

@@ -14,10 +14,11 @@ import json
 import os
 import shutil
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
@@ -36,6 +37,8 @@ from ..study.report import write_study
 from ..study.runner import run_study
 from .imu import STEPS, AxisResult, ImuConfig, ImuResult, loop_row, study_row
 from .imu import record_axes as imu_record_axes
+
+_T = TypeVar("_T")
 
 #: The completion marker of a record's folder in the store.
 MARKER = "done.json"
@@ -147,7 +150,17 @@ class _Outcome:
     noise: ImuNoise | None = None
     study: dict[str, StudyResult] = field(default_factory=dict)
     loop: dict[str, LoopResult] = field(default_factory=dict)
-    seconds: dict[str, float] = field(default_factory=dict)
+    seconds: dict[str, float] = field(default_factory=dict)  # each step's, over the axes
+    axis_seconds: dict[str, dict[str, float]] = field(default_factory=dict)  # by axis, step
+
+    def timed(self, step: str, column: str, work: Callable[[], _T]) -> _T:
+        """Run one axis's step, adding its time to the step's and the axis's."""
+        clock = time.perf_counter()
+        result = work()
+        seconds = time.perf_counter() - clock
+        self.seconds[step] = self.seconds.get(step, 0.0) + seconds
+        self.axis_seconds.setdefault(column, {})[step] = seconds
+        return result
 
 
 def _steps(rec: Record, axes: list[Axis], aux: dict[str, np.ndarray],
@@ -164,19 +177,17 @@ def _steps(rec: Record, axes: list[Axis], aux: dict[str, np.ndarray],
     columns = {a.column: rec.column(a.column) for a in axes}
     channels = {**columns, **aux}
     out = _Outcome(rec, axes, aux, imu)
-    clock = time.perf_counter()
     if "allan" in config.steps:
+        clock = time.perf_counter()
         out.noise = imu_noise(columns, axes, rate, rec.source, min_tau=imu.min_tau)
-        out.seconds["allan"], clock = time.perf_counter() - clock, time.perf_counter()
-    if "study" in config.steps:
-        out.study = {a.column: run_study(columns[a.column], imu.study_config(rate, a))
-                     for a in axes}
-        out.seconds["study"], clock = time.perf_counter() - clock, time.perf_counter()
-    if "loop" in config.steps:
-        out.loop = {a.column: close_loop(columns[a.column],
-                                         {k: v for k, v in channels.items() if k != a.column},
-                                         imu.loop_config(rate, a)) for a in axes}
-        out.seconds["loop"] = time.perf_counter() - clock
+        out.seconds["allan"] = time.perf_counter() - clock
+    for a in axes if "study" in config.steps else ():
+        out.study[a.column] = out.timed("study", a.column, partial(
+            run_study, columns[a.column], imu.study_config(rate, a)))
+    for a in axes if "loop" in config.steps else ():
+        others = {k: v for k, v in channels.items() if k != a.column}
+        out.loop[a.column] = out.timed("loop", a.column, partial(
+            close_loop, columns[a.column], others, imu.loop_config(rate, a)))
     return out
 
 
@@ -211,7 +222,9 @@ def _reports(outcome: _Outcome, out_dir: Path, name: str) -> None:
     if outcome.noise and outcome.study and outcome.loop:
         result = ImuResult(rec.source, rec.require_rate(), rec.n_samples, outcome.imu,
                            outcome.noise, [AxisResult(a, outcome.study[a.column],
-                                                      outcome.loop[a.column]) for a in axes],
+                                                      outcome.loop[a.column],
+                                                      outcome.axis_seconds[a.column])
+                                           for a in axes],
                            sorted(outcome.aux), outcome.seconds["allan"])
         write_imu_report(result, out_dir, name)
         return
