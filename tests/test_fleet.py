@@ -180,3 +180,19 @@ def test_the_full_report_of_a_record_has_every_axis_timed(files, tmp_path):
     marker = json.loads((tmp_path / "imu0" / MARKER).read_text())["seconds"]
     assert marker["study"] == pytest.approx(timing["study (s)"].sum(), abs=0.02)
     assert list(result.table["axis"]) == ["gx_dps", "ax_mps2"]
+
+
+def test_the_command_on_a_running_scheduler_gives_the_in_process_summary(files, tmp_path):
+    from distributed import get_task_stream
+
+    from fosmodel.study.distributed import local_client
+
+    args = ["fleet", *map(str, files), "--steps", "allan"]
+    assert cli.main([*args, "--out", str(tmp_path / "here")]) == 0
+    with local_client(1) as client, get_task_stream(client) as tasks:  # a cluster already up
+        assert cli.main([*args, "--out", str(tmp_path / "there"), "--scheduler",
+                         client.scheduler.address]) == 0
+        assert client.scheduler_info()["workers"]  # still up: the command only connected
+    assert len(tasks.data) == len(files)  # a task per record, run there
+    pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "there" / "fleet.csv"),
+                                  pd.read_csv(tmp_path / "here" / "fleet.csv"))
