@@ -64,7 +64,7 @@ if TYPE_CHECKING:
 TIME_COLUMNS = ("time", "time_s", "t_s")
 OUTLIER_MODES = ("keep", "clip", "drop")
 GAP_MODES = ("refuse", "contiguous", "fill", "segments")
-_REFUSING = ("refuse", "contiguous")
+_REFUSING = ("refuse", "contiguous")  # the gap modes that refuse a record with gaps
 #: An outlier is farther than ``OUTLIER_K`` robust standard deviations from the column median.
 OUTLIER_K = 10.0
 _MAD_TO_SIGMA = 1.4826
@@ -84,6 +84,7 @@ _MAX_ABS = 1e30
 _EXPANSION, _EXPANSION_FLOOR = 100, 64 * 2**20
 #: A time column that stands still over this many rows of a block is no sensor's.
 _STILL_ROWS = 1000
+#: Rows looked at first to tell a column of readings (a fraction there) from raw counts.
 _INTEGER_HEAD = 1000
 #: Sample rates outside this range (Hz) are a unit mistake, not a sensor.
 _RATE_RANGE = (1e-6, 1e9)
