@@ -495,7 +495,7 @@ class FOSModel(BaseEstimator):
             signals = self._signals(y, exog, levels=False)
             runs, lo = _usable(segments, len(signals[OUTPUT]), n0), 0
         else:
-            n = len(y) if np.ndim(y) == 1 else 0  # the one pass says what is wrong with y
+            n = np.shape(y)[0] if np.ndim(y) == 1 else 0  # the one pass names what is wrong
             if n - start > _PREDICT_ROWS and self._blockable(exog, n):
                 return _as_input_type(self._predict_blocks(y, exog, int(start), n), y)
             lo = max(int(start) - n0, 0)
