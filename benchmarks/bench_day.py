@@ -9,7 +9,8 @@ reuses them on the next run).  On its ``gx_dps`` axis:
 * reading: ``fosmodel.io.loader.load_record`` of each file against the
   underlying reader timed in the same run (``pyarrow.parquet.read_table``,
   alone and with its columns turned into numpy arrays as load_record gives
-  them; ``np.load(mmap_mode="r")`` and a copy of every column);
+  them; ``np.load(mmap_mode="r")`` and a copy of every column; ``pandas.read_csv``
+  on the record's first hour written as CSV);
 * the FOS fit ``FOSModel(max_lag=50, degree=2, max_terms=30, stop="max_terms")``
   against statsmodels' Burg AR(50) on the same samples, and the residual loop
   (``close_loop`` with its defaults, no auxiliary channel), each for N from
@@ -49,6 +50,7 @@ from _common import loglog_slope, machine_line
 HERE = Path(__file__).resolve().parent
 RATE = 200.0
 DAY_S = 86_400.0
+CSV_S = 3_600.0  # the CSV holds the first hour
 AXIS = "gx_dps"
 SIZES = (10_000, 40_000, 100_000, 1_000_000, 4_000_000, 17_280_000)
 LOOP_MIN = 40_000  # the loop's default split needs a 30 s outage and two 30 s bias windows
@@ -57,9 +59,12 @@ TARGET_FIT_MB = 2000.0
 
 
 def write_day(folder: Path, seconds: float) -> dict[str, Path]:
-    """Generate the record (unless the files are there) and write Parquet, .npy and the axis."""
+    """Generate the record (unless the files are there) and write Parquet, .npy and the axis.
+
+    Also its first hour as CSV: a day of CSV text would take 2 GB and minutes to write.
+    """
     paths = {"parquet": folder / "day.parquet", "npy": folder / "day.npy",
-             "axis": folder / f"{AXIS}.npy"}
+             "csv": folder / "hour.csv", "axis": folder / f"{AXIS}.npy"}
     if all(p.exists() for p in paths.values()):
         axis = np.load(paths["axis"], mmap_mode="r")
         if len(axis) == round(seconds * RATE):
@@ -72,6 +77,7 @@ def write_day(folder: Path, seconds: float) -> dict[str, Path]:
     frame.to_parquet(paths["parquet"], index=False)
     np.save(paths["npy"], frame.to_records(index=False))
     np.save(paths["axis"], rec.columns[AXIS])
+    frame.iloc[: round(min(seconds, CSV_S) * RATE)].to_csv(paths["csv"], index=False)
     print(f"generated and wrote {rec.n_samples:,} samples x {len(rec.columns)} axes "
           f"in {time.perf_counter() - t0:.0f} s", flush=True)
     return paths
@@ -168,6 +174,7 @@ def time_reading(paths: dict[str, Path]) -> list[tuple[str, float, str, float]]:
     Parquet is compared with pyarrow's table alone and with the table turned
     into numpy columns, which is what load_record gives (checked).
     """
+    import pandas as pd
     import pyarrow.parquet as pq
 
     from fosmodel.io.loader import load_record
@@ -179,7 +186,14 @@ def time_reading(paths: dict[str, Path]) -> list[tuple[str, float, str, float]]:
     def arrow_columns() -> list[np.ndarray]:
         return [c.to_numpy() for c in pq.read_table(paths["parquet"]).columns]
 
-    readers = [("parquet", "pyarrow.parquet.read_table", lambda: pq.read_table(paths["parquet"])),
+    def csv_columns(**options: object) -> list[np.ndarray]:
+        frame = pd.read_csv(paths["csv"], **options)
+        return [frame[name].to_numpy(dtype=float) for name in frame.columns]
+
+    readers = [("csv", "pandas.read_csv + to_numpy of each column", csv_columns),
+               ("csv", "the same with skipinitialspace=True, as the loader reads (' 1.5, x')",
+                lambda: csv_columns(skipinitialspace=True)),
+               ("parquet", "pyarrow.parquet.read_table", lambda: pq.read_table(paths["parquet"])),
                ("parquet", "read_table + to_numpy of each column", arrow_columns),
                ("npy", "np.load(mmap_mode='r') + a copy of each column", npy_columns)]
     rows = []
@@ -277,7 +291,8 @@ def report(reading: list, points: list[dict], whole: dict, n_day: int) -> list[s
              f"axis {AXIS}; each step in a fresh process (OPENBLAS_NUM_THREADS="
              f"{os.environ.get('OPENBLAS_NUM_THREADS', '1')})", machine_line(), "",
              "Reading the six-axis record and its time column (best of 3; load_record also "
-             "checks every cell, the time base and the outlier rule)",
+             "checks every cell, the time base and the outlier rule; the CSV holds the first "
+             f"hour, {round(min(n_day / RATE, CSV_S) * RATE):,} rows)",
              f"{'file':8s} {'load_record s':>13s} {'reader s':>9s} {'ratio':>6s}  reader"]
     for kind, ours, label, base in reading:
         lines.append(f"{kind:8s} {ours:13.2f} {base:9.2f} {ours / base:6.2f}  {label}")
