@@ -18,8 +18,8 @@ import numpy as np
 _SAMPLE = 2**16
 _DIRECT_BELOW = 4 * _SAMPLE  # shorter arrays: numpy.median is as fast
 _BRACKET_SD = 6.0  # half-width of the bracket in standard errors of the sample median
-_SEED = 20
-_CHUNK = 2**16  # a fixed sample: the same array always takes the same path
+_SEED = 20  # a fixed sample: the same array always takes the same path
+_CHUNK = 2**16  # values compared at a time: a chunk's masks stay in the cache
 
 
 def median(x: np.ndarray) -> float:
