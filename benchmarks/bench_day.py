@@ -172,7 +172,8 @@ def time_reading(paths: dict[str, Path]) -> list[tuple[str, float, str, float]]:
     """Best of three reads of each file by load_record and by its underlying reader.
 
     Parquet is compared with pyarrow's table alone and with the table turned
-    into numpy columns, which is what load_record gives (checked).
+    into numpy columns, which is what load_record gives; the CSV with pandas
+    as it is and with the option the loader reads with.
     """
     import pandas as pd
     import pyarrow.parquet as pq
