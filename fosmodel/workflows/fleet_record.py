@@ -29,20 +29,17 @@ from ..io.output import report_directory
 from ..io.record import Record
 from ..io.split import SplitSpec
 from ..loop.closeloop import LoopResult, close_loop
-from ..loop.loop_report import write_loop_report
 from ..noise.axes import Axis, UnitsSpec
-from ..noise.imu_noise import ImuNoise, imu_noise, write_imu_noise
+from ..noise.imu_noise import ImuNoise, imu_noise
 from ..study.harness import StudyResult
-from ..study.report import write_study
 from ..study.runner import run_study
-from .imu import STEPS, AxisResult, ImuConfig, ImuResult, loop_row, study_row
-from .imu import record_axes as imu_record_axes
+from .imu import STEPS, AxisResult, ImuConfig, ImuResult, loop_row, record_axes, study_row
 
 _T = TypeVar("_T")
 
 #: The completion marker of a record's folder in the store.
 MARKER = "done.json"
-#: Names a temperature column goes by (a ROS bag's or a ULog's reader names it temperature).
+#: Suffixes of the formats and compressions a record's name in the store leaves out.
 _SUFFIXES = {".gz", ".bz2", ".xz", ".zst", ".zip", ".csv", ".txt", ".npy", ".parquet", ".bag",
              ".db3", ".mcap", ".ulg"}
 
@@ -110,10 +107,11 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
         The task's time (s), also in the record's marker.
     """
     start = time.perf_counter()
-    name, folder = record_name(path), Path(store) / record_name(path)
+    name = record_name(path)
+    folder = Path(store) / name
     with threadpool_limits(limits=1, user_api="blas"):  # the same bits in any process
         rec = load_record(Path(path), **config.load)  # every column: the temperature too
-        axes, aux = record_axes(rec, config)
+        axes, aux = record_axes(rec, config.columns, config.units, config.temperature)
         outcome = _steps(rec, axes, aux, config)
         rows = _rows(name, outcome)
         if folder.exists():  # another file's or configuration's results
@@ -129,14 +127,6 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
                       "seconds": seconds}
             (tmp / MARKER).write_text(json.dumps(marker, indent=1) + "\n")
     return seconds["total"]
-
-
-def record_axes(rec: Record, config: FleetConfig) -> tuple[list[Axis], dict[str, np.ndarray]]:
-    """Return a record's axes and temperature as the fleet's configuration names them.
-
-    See :func:`fosmodel.workflows.imu.record_axes`.
-    """
-    return imu_record_axes(rec, config.columns, config.units, config.temperature)
 
 
 @dataclass
@@ -215,7 +205,7 @@ def _without_axis(row: dict[str, Any]) -> dict[str, Any]:
 
 def _reports(outcome: _Outcome, out_dir: Path, name: str) -> None:
     """Write the record's reports: the six-axis report with every step, else each step's."""
-    from .imu_report import write_imu_report  # drawing needs matplotlib: only with reports
+    from .imu_report import report_parts, write_imu_report  # drawing: only with reports
 
     out_dir.mkdir()
     rec, axes = outcome.rec, outcome.axes
@@ -228,13 +218,6 @@ def _reports(outcome: _Outcome, out_dir: Path, name: str) -> None:
                            sorted(outcome.aux), outcome.seconds["allan"])
         write_imu_report(result, out_dir, name)
         return
-    if outcome.noise:
-        (out_dir / "noise").mkdir()
-        write_imu_noise(outcome.noise, out_dir / "noise", name)
-    for a in axes:
-        if outcome.study:
-            write_study(outcome.study[a.column], out_dir / "study" / a.column,
-                        f"{name} {a.column} ({a.units})")
-        if outcome.loop:
-            write_loop_report(outcome.loop[a.column], out_dir / "loop" / a.column,
-                              f"{name} {a.column}")
+    for write, args in report_parts(out_dir, name, axes, outcome.noise, outcome.study,
+                                    outcome.loop):
+        write(*args)

@@ -19,16 +19,19 @@ from __future__ import annotations
 
 import json
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import pandas as pd
 
 from ..io.model_file import write_model
 from ..io.output import write_tables, write_text
+from ..loop.closeloop import LoopResult
 from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
 from ..models.summary import markdown_table
-from ..noise.imu_noise import write_imu_noise
+from ..noise.axes import Axis
+from ..noise.imu_noise import ImuNoise, write_imu_noise
+from ..study.harness import StudyResult
 from ..study.report import write_study
 from .imu import AxisResult, ImuResult, in_workers
 
@@ -89,13 +92,31 @@ def _parts(result: ImuResult, out_dir: Path, title: str) -> list[tuple[Callable,
     Most of the time of a report goes into drawing their figures, so they are drawn in
     parallel.
     """
-    parts: list[tuple[Callable, tuple]] = [
-        (write_imu_noise, (result.noise, _mkdir(out_dir / "noise"), title))]
-    for a in result.axes:
-        parts += [(write_study, (a.study, out_dir / "study" / a.axis.column,
-                                 f"{title} {a.axis.column} ({a.axis.units})")),
-                  (write_loop_report, (a.loop, out_dir / "loop" / a.axis.column,
-                                       f"{title} {a.axis.column}"))]
+    return report_parts(out_dir, title, [a.axis for a in result.axes], result.noise,
+                        {a.axis.column: a.study for a in result.axes},
+                        {a.axis.column: a.loop for a in result.axes})
+
+
+def report_parts(
+    out_dir: Path, title: str, axes: Sequence[Axis], noise: ImuNoise | None = None,
+    studies: Mapping[str, StudyResult] | None = None,
+    loops: Mapping[str, LoopResult] | None = None,
+) -> list[tuple[Callable, tuple]]:
+    """List the reports of the steps given, each a writer and its arguments.
+
+    The noise of every axis in ``noise/``, and each axis's study and loop in
+    ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of the steps it ran).
+    """
+    parts: list[tuple[Callable, tuple]] = []
+    if noise is not None:
+        parts.append((write_imu_noise, (noise, _mkdir(out_dir / "noise"), title)))
+    for a in axes:
+        if studies:
+            parts.append((write_study, (studies[a.column], out_dir / "study" / a.column,
+                                        f"{title} {a.column} ({a.units})")))
+        if loops:
+            parts.append((write_loop_report, (loops[a.column], out_dir / "loop" / a.column,
+                                              f"{title} {a.column}")))
     return parts
 
 
