@@ -16,8 +16,8 @@ clear message where it is absent.  Writes every report, table and figure under
   MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped).
 * The effects the issues point to, checked one by one.
 
-Run: ``python studies/real_data.py [--jobs N]``; the studies and loops of the axes run on N
-worker processes (2 by default).
+Run: ``python studies/real_data.py [--jobs N]``; the records' reads and Allan analyses and the
+axes' studies and loops run on N worker processes (2 by default).
 """
 
 from __future__ import annotations
@@ -51,8 +51,8 @@ SUNSIDED = {**ADIS}  # same column names and units
 TOMI = {"gx": ("gyro", "deg/s"), "gy": ("gyro", "deg/s"), "gz": ("gyro", "deg/s"),
         "ax": ("accel", "g"), "ay": ("accel", "g"), "az": ("accel", "g")}
 LOOP_ADIS = (1, 2, 3, 4, 5, 6)
-#: Studies and loops run at once, in worker processes (``--jobs N``; each is independent, and
-#: its numbers are the same whichever process runs it).
+#: Reads, Allan analyses, studies and loops run at once, in worker processes (``--jobs N``;
+#: each is independent, and its numbers are the same whichever process runs it).
 JOBS = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 2
 SUNSIDED_FILE = "unmoved-with-x-pointing-forward-10min.csv.gz"
 

@@ -39,8 +39,8 @@ ALPHA = 1e-3
 # Records over BLOCKED_ROWS have the nonlinearity test's Gram matrix accumulated over blocks of
 # BLOCK rows; shorter ones build the matrix of products as before (bit-identical results).
 BLOCKED_ROWS = 2**21
-ZOOM_BLOCK = 2**20  # samples per chirp z-transform of a long residual (refine_frequency)
 BLOCK = 2**16
+ZOOM_BLOCK = 2**20  # samples per chirp z-transform of a long residual (refine_frequency)
 
 
 @dataclass
