@@ -141,8 +141,45 @@ def test_nonlinearity_in_blocks_matches_one_pass(monkeypatch):
     assert blocked.p_value == pytest.approx(one_pass.p_value, rel=1e-6)
     assert blocked.evidence == one_pass.evidence == {
         "products": 10, "max_lag": 4, "strongest": "y[n-1]*y[n-3]"}
-    np.testing.assert_allclose(blocked.plot["product"], one_pass.plot["product"],
-                               rtol=1e-12, atol=1e-12)
+    for key in ("product", "mean_residual"):  # the figure's bin means of the strongest product
+        np.testing.assert_allclose(blocked.plot[key], one_pass.plot[key], rtol=1e-12, atol=1e-12)
+
+
+def test_plot_arrays_are_short_on_a_long_residual():
+    # a finding keeps at most PLOT_POINTS values per array (one per second for the slow part)
+    n, rate = 3 * dg.PLOT_POINTS + 7, 100.0
+    t = np.arange(n) / rate
+    r = _white(n, 3) + 0.01 * t
+    lagged = np.column_stack([np.r_[np.zeros(k), r[:-k]] for k in range(1, 3)])
+    found = [dg.periodic(r, t, rate), dg.trend(r, t), dg.change_point(r, t),
+             dg.nonlinearity(r, lagged)]
+    for f in found:
+        for key, value in f.plot.items():
+            if key in ("second", "mean"):
+                assert len(value) == n // 100
+            else:
+                assert len(value) <= dg.PLOT_POINTS, (f.test, key)
+    trend, step = found[1].plot, found[2].plot
+    np.testing.assert_array_equal(step["time"], t[::4])
+    np.testing.assert_allclose(step["cusum"], np.cumsum(r - r.mean())[::4], rtol=1e-9)
+    np.testing.assert_allclose(trend["mean"], r[: n // 100 * 100].reshape(-1, 100).mean(axis=1))
+    np.testing.assert_array_equal(trend["second"], t[: n // 100 * 100 : 100])
+    freqs, s = dg.least_squares_spectrum(r, rate)
+    np.testing.assert_allclose(found[0].plot["spectrum"],
+                               s[: len(s) // 2 * 2].reshape(-1, 2).mean(axis=1))
+    assert len(found[0].plot["freqs"]) == len(s) // 2
+
+
+def test_thinning_helpers_against_their_definitions():
+    x = np.arange(10.0)
+    np.testing.assert_array_equal(dg.thinned(x, 4), [0.0, 3.0, 6.0, 9.0])
+    np.testing.assert_array_equal(dg.thinned(x, 20), x)
+    np.testing.assert_array_equal(dg.block_means(x, 4), [1.0, 4.0, 7.0])
+    np.testing.assert_array_equal(dg.block_means(x, 10), x)
+    assert not np.shares_memory(dg.thinned(x, 4), x)
+    centres, means = dg.bin_means(np.r_[np.zeros(5), np.ones(5)], x, bins=4)
+    np.testing.assert_array_equal(centres, [0.0, 1.0])
+    np.testing.assert_array_equal(means, [2.0, 7.0])
 
 
 @pytest.mark.parametrize("shape, form", [("linear", "linear"), ("warmup", "exponential")])

@@ -221,3 +221,21 @@ def test_a_channel_of_another_length_is_named_in_a_long_prediction(monkeypatch):
     monkeypatch.setattr(model_module, "_PREDICT_ROWS", 500)
     with pytest.raises(InputError, match="channel 'temp' has 2999 samples, the output has 3000"):
         fit.predict(y, {"temp": temp[:-1]})
+
+
+def test_level_series_keeps_recent_series_within_its_budget(monkeypatch):
+    from fosmodel.core import levels
+
+    monkeypatch.setattr(levels, "_RECENT", [])
+    monkeypatch.setattr(levels, "_KEEP_SAMPLES", 1000)
+    y = np.random.default_rng(0).standard_normal(400)
+    first = level_series(y, 1.0, 100.0)
+    assert level_series(y, 1.0, 100.0) is first
+    second, third = level_series(y, 2.0, 100.0), level_series(y, 3.0, 100.0)  # 1200 samples
+    assert level_series(y, 3.0, 100.0) is third and level_series(y, 2.0, 100.0) is second
+    again = level_series(y, 1.0, 100.0)  # the oldest went first
+    assert again is not first
+    np.testing.assert_array_equal(again, first)
+    long = np.random.default_rng(1).standard_normal(1500)  # longer than the budget: not kept
+    assert level_series(long, 1.0, 100.0) is not level_series(long, 1.0, 100.0)
+    assert levels._RECENT == []

@@ -96,10 +96,12 @@ def level_gain(tau_s: float, rate: float) -> float:
 def level_series(y: np.ndarray, tau_s: float, rate: float) -> np.ndarray:
     """``level[n]`` for ``n = 0 .. N-1`` (each from ``y[0] .. y[n-1]``), started at ``y[0]``.
 
-    The few most recent series are kept (read-only), keyed by the array, its
-    length, two sums of its values, ``tau_s`` and ``rate``: a study predicts and
+    The few most recent series are kept (read-only; at most :data:`_KEEP` of them
+    and :data:`_KEEP_SAMPLES` samples in all), keyed by the array, its length,
+    two sums of its values, ``tau_s`` and ``rate``: a study predicts and
     free-runs the same record with many models, and the recursion over millions
-    of samples costs more than the sums that recognise it.
+    of samples costs more than the sums that recognise it.  A day's series are
+    too long to keep: whoever reuses them (the residual loop) holds them itself.
     """
     y = np.asarray(y, dtype=float)
     key = (id(y), len(y), float(y.sum()), float(y[::97].sum()), float(tau_s), float(rate))
@@ -110,11 +112,13 @@ def level_series(y: np.ndarray, tau_s: float, rate: float) -> np.ndarray:
     series = smooth(y, level_gain(tau_s, rate))
     series.flags.writeable = False
     _RECENT.insert(0, (key, y, series))
-    del _RECENT[_KEEP:]
+    held = np.cumsum([len(kept) for _, _, kept in _RECENT])
+    del _RECENT[min(_KEEP, int(np.searchsorted(held, _KEEP_SAMPLES, side="right"))):]
     return series
 
 
 _KEEP = 8
+_KEEP_SAMPLES = 2**24  # 128 MiB of series (and as much of the records they hold alive)
 _RECENT: list[tuple[tuple, np.ndarray, np.ndarray]] = []
 
 

@@ -281,18 +281,12 @@ def close_loop(
         if not candidates:
             break
         say(f"round {len(steps) + 1}: {len(candidates)} effect(s) to try")
-        trials, kept, waiting = _round(fitter, current, family, candidates, channels, y,
-                                       segments, config, say)
-        for effect, _, _, comparison in trials:
-            if not any(k[0] is effect for k in kept):
-                rejected.append({"effect": effect.describe(), "kind": effect.kind,
-                                 "round": len(steps) + 1, "evidence": effect.evidence,
-                                 "evaluation": comparison})
-        if not kept:
+        chosen, refused, waiting = _round(fitter, current, family, candidates, channels, y,
+                                          segments, config, say, len(steps) + 1)
+        rejected += refused
+        if chosen is None:
             break
-        effect, family, model, comparison = _choose(kept)
-        # what passed but did not go in is tried again on top of it, firing or not
-        waiting += [k[0] for k in kept if k[0] is not effect]
+        effect, family, model, comparison = chosen
         steps.append(Step(effect, _new_terms(current, model), _lag_of(effect, model),
                           _tau_of(effect, model), comparison,
                           _metrics(model, y, segments.predict, config)))
@@ -308,23 +302,41 @@ def close_loop(
 
 def _round(fitter: _Fitter, current: BoundModel, family: CandidateFamily,
            candidates: list[Effect], channels: Mapping[str, np.ndarray], y: np.ndarray,
-           segments: Split, config: LoopConfig,
-           say: Progress) -> tuple[list[tuple], list[tuple], list[Effect]]:
-    """Fit and judge each candidate on top of ``current``: the trials, those kept, those waiting.
+           segments: Split, config: LoopConfig, say: Progress,
+           number: int) -> tuple[tuple | None, list[dict], list[Effect]]:
+    """Fit and judge each candidate on top of ``current``, and choose the one that goes in.
 
-    The judge's forecasts from every origin (a few record-long arrays) live for the round only.
+    Returns the chosen ``(effect, family, model, comparison)`` or None, the rejected
+    candidates' entries of :attr:`LoopResult.rejected` (``number`` is the round's) and the
+    effects that wait for the next round: those :func:`_screen` holds back and those
+    accepted but not chosen, which are tried again on top of it, firing or not.
+
+    The trials' models and families (their columns are record-long) and the judge's
+    forecasts from every origin live for the round only; a rejected trial's only while
+    it is judged, unless :func:`_screen` may judge it again.
     """
     judge = _Judge(fitter, current, y, segments, config)
-    trials = []
+    trials: list[tuple] = []
     for i, effect in enumerate(candidates, 1):
         clock = time.perf_counter()
         trial_family = family.add(effect, channels, len(y), config.rate, segments.train)
         trial = fitter.fit(trial_family)
-        trials.append((effect, trial_family, trial, judge(trial, effect)))
+        comparison = judge(trial, effect)
+        if comparison["accepted"] or _judged_again(effect):
+            trials.append((effect, trial_family, trial, comparison))
+        else:  # without its model and columns: nothing reads them again
+            trials.append((effect, None, None, comparison))
+        del trial_family, trial  # now, not when the next trial's columns are already made
         say(f"  [{i}/{len(candidates)}] {effect.describe()}: "
             f"{_verdict_text(trials[-1][3])} ({time.perf_counter() - clock:.1f} s)")
     kept, waiting = _screen(trials, judge)
-    return trials, kept, waiting
+    refused = [{"effect": effect.describe(), "kind": effect.kind, "round": number,
+                "evidence": effect.evidence, "evaluation": comparison}
+               for effect, _, _, comparison in trials if not any(k[0] is effect for k in kept)]
+    if not kept:
+        return None, refused, waiting
+    chosen = _choose(kept)
+    return chosen, refused, waiting + [k[0] for k in kept if k[0] is not chosen[0]]
 
 
 def score_family(
@@ -541,6 +553,14 @@ def _screen(trials: list[tuple], judge: _Judge) -> tuple[list[tuple], list[Effec
 SLOW_MARGIN = 0.2
 
 
+def _judged_again(effect: Effect) -> bool:
+    """Whether :func:`_screen` may judge ``effect``'s trial again when it is rejected.
+
+    The level and a channel's fast form are the rivals a slow form must beat clearly.
+    """
+    return effect.kind == "level" or effect.form == "fast"
+
+
 def _clearly_better(gains: list[float], rival: list[float]) -> bool:
     """Whether ``gains`` remove at least :data:`SLOW_MARGIN` of what ``rival`` leaves.
 
@@ -557,9 +577,9 @@ def _residual(model: BoundModel, y: np.ndarray, segments: Split) -> np.ndarray:
 
 
 def _fast(x: np.ndarray, rate: float, slow_s: float) -> np.ndarray:
-    """``x`` minus its centred moving mean over ``slow_s`` seconds (along axis 0)."""
+    """``x`` minus its centred moving mean over ``slow_s`` seconds."""
     width = max(3, round(slow_s * rate))
-    return x - uniform_filter1d(x, width, axis=0, mode="nearest")
+    return x - uniform_filter1d(x, width, mode="nearest")
 
 
 class _Diagnostics:
@@ -601,9 +621,10 @@ class _Diagnostics:
     def _nonlinearity(self, fast: np.ndarray, n0: int) -> Finding:
         """Test the residual for products of the fast parts of the lagged outputs."""
         config, stop = self.config, self.stop
-        lagged = np.column_stack([self.y[n0 - k : stop - k]
-                                  for k in range(1, config.nonlinear_lags + 1)])
-        return nonlinearity(fast, _fast(lagged, config.rate, config.slow_s), alpha=config.alpha)
+        lagged = np.column_stack([_fast(self.y[n0 - k : stop - k], config.rate, config.slow_s)
+                                  for k in range(1, config.nonlinear_lags + 1)])  # one at a time:
+        # the filter of a whole matrix holds two more copies of it
+        return nonlinearity(fast, lagged, alpha=config.alpha)
 
 
 def _choose(kept: list[tuple]) -> tuple:

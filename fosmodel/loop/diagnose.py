@@ -41,6 +41,9 @@ ALPHA = 1e-3
 BLOCKED_ROWS = 2**21
 BLOCK = 2**16
 ZOOM_BLOCK = 2**20  # samples per chirp z-transform of a long residual (refine_frequency)
+#: Most values of a finding's figure arrays: a figure shows no more, and record-long arrays
+#: kept in every finding would hold gigabytes of a day's residual.
+PLOT_POINTS = 20_000
 
 
 @dataclass
@@ -59,7 +62,8 @@ class Finding:
     evidence : dict
         JSON-serialisable details (frequency, channel and lag, form of a trend...).
     plot : dict
-        Arrays for the test's figure.
+        Arrays for the test's figure, each at most :data:`PLOT_POINTS` long (or one value
+        per second of the residual): thinned, block means or bin means of the test's own.
     """
 
     test: str
@@ -83,6 +87,40 @@ class Finding:
 
 def _bonferroni(p: float, count: int) -> float:
     return float(min(1.0, p * count))
+
+
+def thinned(x: np.ndarray, points: int = PLOT_POINTS) -> np.ndarray:
+    """Every k-th value of ``x``, at most ``points`` of them: a smooth curve's own values."""
+    return np.array(x[:: -(-len(x) // points) or 1])  # a copy: a view would keep x alive
+
+
+def block_means(x: np.ndarray, points: int = PLOT_POINTS) -> np.ndarray:
+    """Means of consecutive blocks of ``x``, at most ``points`` of them: a noisy curve's level.
+
+    A remainder shorter than a block is left out.
+    """
+    step = max(1, -(-len(x) // points))
+    return np.array(x[: len(x) // step * step].reshape(-1, step).mean(axis=1))
+
+
+def second_means(time: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the times and means of ``x`` over consecutive one-second blocks of ``time``."""
+    step = max(1, round(1.0 / float(time[1] - time[0]))) if len(time) > 1 else 1
+    m = len(x) // step * step
+    return np.array(time[:m:step]), x[:m].reshape(-1, step).mean(axis=1)
+
+
+def bin_means(x: np.ndarray, r: np.ndarray, bins: int = 20) -> tuple[np.ndarray, np.ndarray]:
+    """Means of ``x`` and ``r`` in quantile bins of ``x``.
+
+    A quantised ``x`` repeats edges, whose bins drop.
+    """
+    edges = np.unique(np.quantile(x, np.linspace(0, 1, bins + 1)))
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, max(len(edges) - 2, 0))
+    count = np.bincount(idx)
+    kept = count > 0
+    return (np.bincount(idx, weights=x)[kept] / count[kept],
+            np.bincount(idx, weights=r)[kept] / count[kept])
 
 
 # -- whiteness ------------------------------------------------------------------------------
@@ -161,11 +199,10 @@ def periodic(
     fap = float(-np.expm1(m * np.log1p(-math.exp(-z[k])))) if z[k] > 0 else 1.0
     f_hat = refine_frequency(residual, time, float(freqs[k]), rate)
     amplitude = math.sqrt(2.0 * s[k] * float(np.var(residual)))
-    threshold = level * math.log(m / alpha) if m else level
     return Finding("periodic", float(z[k]), fap, alpha,
                    {"freq_hz": f_hat, "freq_fft_hz": float(freqs[k]), "power": float(s[k]),
                     "amplitude": amplitude},
-                   {"freqs": freqs, "spectrum": s, "threshold": threshold})
+                   {"freqs": block_means(freqs), "spectrum": block_means(s)})
 
 
 def refine_frequency(
@@ -352,10 +389,11 @@ def nonlinearity(residual: np.ndarray, lagged: np.ndarray, alpha: float = ALPHA)
     f = ((rss0 - rss1) / q) / (rss1 / dof)
     strongest = int(np.argmax(np.abs(coef[lags:])))  # on standardised products
     i, j = iu[0][strongest] + 1, iu[1][strongest] + 1
+    centres, means = bin_means(product(strongest), residual)
     return Finding("nonlinear", float(f), float(stats.f.sf(f, q, dof)), alpha,
                    {"products": int(q), "max_lag": int(lags),
                     "strongest": f"y[n-{i}]^2" if i == j else f"y[n-{i}]*y[n-{j}]"},
-                   {"product": product(strongest), "residual": residual})
+                   {"product": centres, "mean_residual": means})
 
 
 def _product_gram(lagged: np.ndarray, r: np.ndarray, iu: tuple) -> tuple:
@@ -477,7 +515,8 @@ def trend(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Findi
                    {"form": form, "tau_s": float(best_tau),
                     "range": float(curve.max() - curve.min()),
                     "bic_gain": float(n * math.log(rss0 / n) - bic)},
-                   {"time": time, "fit": curve})
+                   {"time": thinned(time), "fit": thinned(curve),
+                    **dict(zip(("second", "mean"), second_means(time, residual)))})
 
 
 def _trend_fit(form: str, tau: float | None, cols: list, rss0: float, n: int) -> tuple:
@@ -518,7 +557,7 @@ def change_point(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -
     bic_gain = n * math.log(rss0 / (rss0 - reduction)) - 2 * math.log(n)  # shift and time
     return Finding("step", d, float(stats.kstwobign.sf(d)), alpha,
                    {"time_s": float(time[split]), "shift": shift, "bic_gain": float(bic_gain)},
-                   {"time": time, "cusum": cusum})
+                   {"time": thinned(time), "cusum": thinned(cusum)})
 
 
 def allan(residual: np.ndarray, rate: float, alpha: float = ALPHA) -> Finding:

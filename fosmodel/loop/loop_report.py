@@ -91,14 +91,13 @@ def residual_figure(result: LoopResult, title: str) -> Figure:
             axes[3].plot(f.plot["lags"], f.plot["rho"], label=f"{label} {f.evidence['channel']}",
                          **{**style, "ls": ["-", "--", ":", "-."][k % 4]})
         tr = by["trend"].plot
-        axes[4].plot(*_block_means(tr["time"], result_residual(result, label)), label=label,
-                     **style)
+        axes[4].plot(tr["second"], tr["mean"], label=label, **style)
         axes[4].plot(tr["time"], tr["fit"], **{**style, "lw": 2 * style["lw"]})
         cp = by["step"].plot
         axes[5].plot(cp["time"], cp["cusum"], label=label, **style)
         if "nonlinear" in by:
             nl = by["nonlinear"].plot
-            axes[6].plot(*_binned(nl["product"], nl["residual"]), marker="o", label=label,
+            axes[6].plot(nl["product"], nl["mean_residual"], marker="o", label=label,
                          **style)
     white = result.findings_before[-1].plot
     axes[2].loglog(white["taus"], white["white"], "k:", label="white noise")
@@ -134,29 +133,8 @@ def _panels(units: str) -> list[tuple[str, str, str]]:
              f"mean residual ({u})")]
 
 
-def result_residual(result: LoopResult, label: str) -> np.ndarray:
-    """Return the residual of the first (``label`` "before") or the final model."""
-    return result.residual_before if label == "before" else result.residual_after
-
-
 def _smooth(s: np.ndarray, width: int = 25) -> np.ndarray:
     return np.convolve(s, np.ones(width) / width, mode="same")
-
-
-def _block_means(time: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    step = max(1, int(round(1.0 / (time[1] - time[0])))) if len(time) > 1 else 1
-    m = len(r) // step * step
-    return time[:m:step], r[:m].reshape(-1, step).mean(axis=1)
-
-
-def _binned(x: np.ndarray, r: np.ndarray, bins: int = 20) -> tuple[np.ndarray, np.ndarray]:
-    """Mean of ``r`` in quantile bins of ``x``; a quantised ``x`` repeats edges, whose bins drop."""
-    edges = np.unique(np.quantile(x, np.linspace(0, 1, bins + 1)))
-    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, max(len(edges) - 2, 0))
-    count = np.bincount(idx)
-    kept = count > 0
-    centres = np.bincount(idx, weights=x)[kept] / count[kept]
-    return centres, np.bincount(idx, weights=r)[kept] / count[kept]
 
 
 def _fired_text(result: LoopResult) -> str:
