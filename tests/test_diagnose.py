@@ -193,6 +193,34 @@ def test_trend_detects_and_names_the_form(shape, form):
         assert 15 < found.evidence["tau_s"] < 60
 
 
+@pytest.mark.parametrize("shape", ["linear", "warmup", "quadratic"])
+def test_trend_curve_is_the_least_squares_fit_of_its_form(shape):
+    # the curve (evidence "range", figure) against numpy's lstsq with the constant column
+    n = 20000
+    t = _time(n)
+    slow = {"linear": 0.002 * t, "warmup": 0.3 * (1 - np.exp(-t / 30.0)),
+            "quadratic": 1e-6 * (t - 40.0) ** 2}[shape]
+    r = slow + _white(n, 6)
+    found = dg.trend(r, t)
+    form, tau = found.evidence["form"], None
+    cols = [np.ones(n)]
+    if form in ("linear", "quadratic", "linear+exponential"):
+        cols.append(t - t[0])
+    if form == "quadratic":
+        cols.append((t - t[0]) ** 2)
+    if "exponential" in form:
+        span = t[-1] - t[0]
+        taus = np.geomspace(span / 50, span, 30)  # the scan's grid: which one won
+        fits = [np.linalg.lstsq(np.column_stack([*cols, np.exp(-(t - t[0]) / k)]), r,
+                                rcond=None) for k in taus]
+        tau = taus[int(np.argmin([f[1][0] for f in fits]))]
+        cols.append(np.exp(-(t - t[0]) / tau))
+    a = np.column_stack(cols)
+    curve = a @ np.linalg.lstsq(a, r, rcond=None)[0]
+    assert found.evidence["range"] == pytest.approx(np.ptp(curve), rel=1e-9)
+    np.testing.assert_allclose(found.plot["fit"], curve, rtol=1e-9, atol=1e-12)  # 20,000: all
+
+
 def test_trend_and_step_false_alarms_on_white_noise():
     t = _time(3000)
     trend_fires = step_fires = 0

@@ -442,43 +442,7 @@ def _blocked_product_gram(lagged: np.ndarray, r: np.ndarray, iu: tuple) -> tuple
     return gram, g, product
 
 
-def _rss(a: np.ndarray, b: np.ndarray, coef: bool = False):
-    """Residual sum of squares of b on the columns of a (and the weights).
-
-    Through the normal equations of the standardised columns: a few columns of
-    very many samples, where ``lstsq``'s SVD would cost far more.
-    """
-    scale = np.where(a.std(axis=0) > 0, a.std(axis=0), np.abs(a).max(axis=0))
-    scaled = a / scale
-    sol = np.linalg.lstsq(scaled.T @ scaled, scaled.T @ b, rcond=None)[0] / scale
-    r = b - a @ sol
-    return (float(r @ r), sol) if coef else float(r @ r)
-
-
 # -- drift and steps ------------------------------------------------------------------------
-
-TREND_FORMS = ("linear", "quadratic", "exponential", "linear+exponential")
-
-
-def trend_columns(time: np.ndarray, form: str, tau_s: float | None, t0: float) -> np.ndarray:
-    """Return the time functions of a trend form (without the constant).
-
-    Raises
-    ------
-    ValueError
-        An exponential form without its time constant ``tau_s``.
-    """
-    cols = []
-    if form in ("linear", "quadratic", "linear+exponential"):
-        cols.append(time - t0)
-    if form == "quadratic":
-        cols.append((time - t0) ** 2)
-    if form in ("exponential", "linear+exponential"):
-        if tau_s is None:
-            raise ValueError(f"the {form} trend needs its time constant tau_s")
-        cols.append(np.exp(-(time - t0) / tau_s))
-    return np.column_stack(cols)
-
 
 def trend(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Finding:
     """F test of a low-frequency trend: polynomial or exponential warm-up, best by BIC.
@@ -505,10 +469,13 @@ def trend(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Findi
                                rss0, n))
     bic, form, tau, rss = min(fits, key=lambda f: f[0])
     best_tau = min((f for f in fits if f[2] is not None), key=lambda f: f[0])[2]
-    cols = trend_columns(time, form, tau, t0)
-    _, coef = _rss(np.column_stack([np.ones(n), cols]), residual, coef=True)
-    curve = coef[0] + cols @ coef[1:]
-    q = cols.shape[1]
+    chosen = [base[name] for name in _POLYNOMIAL[form]]
+    if tau is not None:
+        e = _centred(np.exp(-(time - t0) / tau))
+        chosen.append((e, float(e @ r)))
+    weights = _trend_weights(chosen)[1]
+    curve = residual.mean() + sum(w * column for w, (column, _) in zip(weights, chosen))
+    q = len(chosen)
     f = ((rss0 - rss) / q) / (rss / (n - q - 1))
     p = _bonferroni(float(stats.f.sf(f, q, n - q - 1)), len(fits))
     return Finding("trend", float(f), p, alpha,
@@ -519,14 +486,25 @@ def trend(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Findi
                     **dict(zip(("second", "mean"), second_means(time, residual)))})
 
 
+#: The polynomial columns of each trend form (the exponential ones add their exponential).
+_POLYNOMIAL = {"linear": ("t",), "quadratic": ("t", "t2"), "exponential": (),
+               "linear+exponential": ("t",)}
+
+
+def _trend_weights(cols: list) -> tuple[np.ndarray, np.ndarray]:
+    """Return ``g`` and the least-squares weights ``G^-1 g`` of ``[(column, column . r), ...]``."""
+    gram = np.array([[float(a @ b) for b, _ in cols] for a, _ in cols])
+    g = np.array([gr for _, gr in cols])
+    return g, np.linalg.lstsq(gram, g, rcond=None)[0]
+
+
 def _trend_fit(form: str, tau: float | None, cols: list, rss0: float, n: int) -> tuple:
     """Return ``(BIC, form, tau, RSS)`` of the centred columns ``[(column, column . r), ...]``.
 
     ``RSS = RSS0 - g' G^-1 g``.
     """
-    gram = np.array([[float(a @ b) for b, _ in cols] for a, _ in cols])
-    g = np.array([gr for _, gr in cols])
-    rss = rss0 - float(g @ np.linalg.lstsq(gram, g, rcond=None)[0])
+    g, weights = _trend_weights(cols)
+    rss = rss0 - float(g @ weights)
     k = len(cols) + (tau is not None)
     return (n * math.log(max(rss, 1e-300) / n) + k * math.log(n), form, tau, rss)
 
