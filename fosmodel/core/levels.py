@@ -100,8 +100,7 @@ def level_series(y: np.ndarray, tau_s: float, rate: float) -> np.ndarray:
     and :data:`_KEEP_SAMPLES` samples in all), keyed by the array, its length,
     two sums of its values, ``tau_s`` and ``rate``: a study predicts and
     free-runs the same record with many models, and the recursion over millions
-    of samples costs more than the sums that recognise it.  A day's series are
-    too long to keep: whoever reuses them (the residual loop) holds them itself.
+    of samples costs more than the sums that recognise it.
     """
     y = np.asarray(y, dtype=float)
     key = (id(y), len(y), float(y.sum()), float(y[::97].sum()), float(tau_s), float(rate))
@@ -118,7 +117,9 @@ def level_series(y: np.ndarray, tau_s: float, rate: float) -> np.ndarray:
 
 
 _KEEP = 8
-_KEEP_SAMPLES = 2**24  # 128 MiB of series (and as much of the records they hold alive)
+#: 1 GiB of series (and the records they hold alive): four levels of a day at 200 Hz, which a
+#: study's FOS model with levels reads in every prediction and free run of that day.
+_KEEP_SAMPLES = 2**27
 _RECENT: list[tuple[tuple, np.ndarray, np.ndarray]] = []
 
 
