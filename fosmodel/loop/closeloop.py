@@ -621,9 +621,9 @@ class _Diagnostics:
     def _nonlinearity(self, fast: np.ndarray, n0: int) -> Finding:
         """Test the residual for products of the fast parts of the lagged outputs."""
         config, stop = self.config, self.stop
+        # filtered one lag at a time: the filter of the whole matrix holds two more copies of it
         lagged = np.column_stack([_fast(self.y[n0 - k : stop - k], config.rate, config.slow_s)
-                                  for k in range(1, config.nonlinear_lags + 1)])  # one at a time:
-        # the filter of a whole matrix holds two more copies of it
+                                  for k in range(1, config.nonlinear_lags + 1)])
         return nonlinearity(fast, lagged, alpha=config.alpha)
 
 
