@@ -172,3 +172,33 @@ def test_too_short_a_record_is_refused():
     rec = make_scenario("clean", duration=60.0, seed=0)
     with pytest.raises(InputError, match="too short for the split"):
         close_loop(rec.columns["gyro_x"], {}, LoopConfig(rate=rec.rate))
+
+
+def test_a_rejected_candidate_keeps_no_columns_into_the_next_diagnosis(monkeypatch):
+    # memory of long records: at each diagnosis the only effect columns alive are the model's
+    import gc
+    import weakref
+
+    from fosmodel.loop import closeloop
+
+    made: list = []
+    checked: list[int] = []
+    add, diagnose = CandidateFamily.add, closeloop._Diagnostics.__call__
+
+    def recording_add(self, effect, *args, **kwargs):
+        family = add(self, effect, *args, **kwargs)
+        made.extend(weakref.ref(v) for k, v in family.columns.items() if k not in self.columns)
+        return family
+
+    def checking_diagnose(self, model):
+        gc.collect()
+        alive = [ref() for ref in made if ref() is not None]
+        assert all(any(a is v for v in model.inputs.values()) for a in alive)
+        checked.append(len(made))
+        return diagnose(self, model)
+
+    monkeypatch.setattr(CandidateFamily, "add", recording_add)
+    monkeypatch.setattr(closeloop._Diagnostics, "__call__", checking_diagnose)
+    res = _run("slow_steps", 0)[-1]
+    assert len(checked) >= 2 and checked[-1] > 0  # a diagnosis after columns were tried
+    assert any(r["kind"] in ("drift", "step") for r in res.rejected)
