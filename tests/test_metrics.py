@@ -342,6 +342,11 @@ def test_outage_metrics_residual_given_or_wrong():
     assert out["bias_rms"] == {1.0: 0.25}
     with pytest.raises(InputError, match=r"shape \(400,\).*\[0, 500\) has 500"):
         outage_metrics(ZeroModel(), y, 10.0, "accel", "g", slice(0, 500), residual=np.zeros(400))
+    bad = np.full(500, 0.25)
+    bad[7] = np.nan
+    with pytest.raises(InputError, match="first at sample 7; bias_rms needs a finite residual"):
+        outage_metrics(ZeroModel(), y, 10.0, "accel", "g", slice(0, 500), horizon_s=5.0,
+                       taus=(1.0, 2.0), residual=bad)
 
 
 def test_outage_metrics_segment_inside_the_lag_window():

@@ -212,6 +212,12 @@ def free_run_errors(
     if s.size and s.max() + n_steps > len(y):
         raise InputError(f"an outage starting at sample {s.max()} needs {n_steps} samples, "
                          f"but y has {len(y)}")
+    return _free_run_errors(model, y, s, n_steps)
+
+
+def _free_run_errors(model: FreeRunModel, y: np.ndarray, s: np.ndarray,
+                     n_steps: int) -> np.ndarray:
+    """:func:`free_run_errors` of a checked record ``y`` and outage starts ``s`` inside it."""
     truth = y[s[:, None] + np.arange(n_steps)]
     if hasattr(model, "free_runs"):
         runs = model.free_runs(y, s, n_steps)
@@ -302,11 +308,26 @@ def bias_rms(residual: ArrayLike, rate: float, tau_s: float) -> float:
         Non-finite residual (the first such sample is named), a window shorter than
         one sample, or fewer than 2 windows fitting in the residual.
     """
+    return _bias_rms(_finite_residual(residual), rate, tau_s)
+
+
+def _finite_residual(residual: ArrayLike) -> np.ndarray:
+    """Return ``residual`` as checked by :func:`as_signal`, or say that bias_rms needs it finite.
+
+    Raises
+    ------
+    InputError
+        Not a finite 1-D signal.
+    """
     try:
-        r = as_signal(residual, "residual")
+        return as_signal(residual, "residual")
     except InputError as exc:
         raise InputError(f"{exc}; bias_rms needs a finite residual "
                          "(slice off the model's lag window first)") from None
+
+
+def _bias_rms(r: np.ndarray, rate: float, tau_s: float) -> float:
+    """:func:`bias_rms` of a checked residual ``r``."""
     width = round(check_positive(tau_s, "tau_s") * check_positive(rate, "rate"))
     if width < 1:
         raise InputError(f"tau_s={tau_s} s is shorter than one sample at {rate} Hz")
@@ -387,7 +408,8 @@ def outage_metrics(
     n_steps = round(check_positive(horizon_s, "horizon_s") * check_positive(rate, "rate"))
     if n_steps < 1:
         raise InputError(f"horizon_s={horizon_s} s is shorter than one sample at {rate} Hz")
-    errors = free_run_errors(model, y, outage_starts(start, stop, n_steps, n_starts), n_steps)
+    # y is checked here and the residual below, once each: not again per free run or tau
+    errors = _free_run_errors(model, y, outage_starts(start, stop, n_steps, n_starts), n_steps)
     position = None
     if sensor is not None:
         if units is None:
@@ -399,13 +421,14 @@ def outage_metrics(
     if residual.shape != (stop - start,):
         raise InputError(f"residual has shape {residual.shape}, but the segment "
                          f"[{start}, {stop}) has {stop - start} samples")
+    checked = _finite_residual(residual)
     with np.errstate(over="ignore"):  # a diverging run (an unstable model) squares to inf
         rms_position = None if position is None else float(np.sqrt(np.mean(position**2)))
         outage_mse = float(np.mean(errors**2))
     return {
         "outage_mse": outage_mse,
         "outage_position_error_m": rms_position,
-        "bias_rms": {tau: bias_rms(residual, rate, tau) for tau in taus},
+        "bias_rms": {tau: _bias_rms(checked, rate, tau) for tau in taus},
     }
 
 
