@@ -99,15 +99,18 @@ def block_means(x: np.ndarray, points: int = PLOT_POINTS) -> np.ndarray:
 
     A remainder shorter than a block is left out.
     """
-    step = max(1, -(-len(x) // points))
-    return np.array(x[: len(x) // step * step].reshape(-1, step).mean(axis=1))
+    return _means_of_blocks(x, max(1, -(-len(x) // points)))
 
 
 def second_means(time: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return the times and means of ``x`` over consecutive one-second blocks of ``time``."""
     step = max(1, round(1.0 / float(time[1] - time[0]))) if len(time) > 1 else 1
-    m = len(x) // step * step
-    return np.array(time[:m:step]), x[:m].reshape(-1, step).mean(axis=1)
+    return np.array(time[: len(x) // step * step : step]), _means_of_blocks(x, step)
+
+
+def _means_of_blocks(x: np.ndarray, step: int) -> np.ndarray:
+    """Means of consecutive blocks of ``step`` values of ``x``, a new array (a remainder left out)."""
+    return x[: len(x) // step * step].reshape(-1, step).mean(axis=1)
 
 
 def bin_means(x: np.ndarray, r: np.ndarray, bins: int = 20) -> tuple[np.ndarray, np.ndarray]:
