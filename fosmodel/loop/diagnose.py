@@ -109,7 +109,7 @@ def second_means(time: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def _means_of_blocks(x: np.ndarray, step: int) -> np.ndarray:
-    """Means of consecutive blocks of ``step`` values of ``x``, a new array (a remainder left out)."""
+    """Means of consecutive blocks of ``step`` values of ``x`` (new; a remainder left out)."""
     return x[: len(x) // step * step].reshape(-1, step).mean(axis=1)
 
 
