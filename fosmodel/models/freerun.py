@@ -16,14 +16,17 @@ A fitted expansion is split once (:func:`split_expansion`) into
 floats.  :func:`run_many` runs many outages at once: a linear model by
 superposition (the response to the state at the outage start plus the
 response to the drive, both from one pass over the outage length, cached),
-a nonlinear one by a recursion vectorised across the outages.  Both are
+a nonlinear one by a recursion vectorised across the outages, compiled by numba
+where the ``fast`` extra is installed (:mod:`fosmodel.models.freerun_numba`).  Each is
 tested against :func:`run_one`.
 """
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -256,7 +259,52 @@ def _superposition(ex: Expansion, hist: np.ndarray, levels: np.ndarray,
 
 def _recursion(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.ndarray,
                rests: Sequence[np.ndarray | None]) -> np.ndarray:
-    """Nonlinear runs: the recursion of :func:`run_one`, one sample of every run at a time.
+    """Nonlinear runs: the recursion of :func:`run_one`, compiled where numba is installed.
+
+    Without numba (or with ``FOSMODEL_NUMBA=0`` in the environment) it is
+    :func:`_recursion_numpy`, the reference the compiled one is tested against.
+    """
+    kernel = _compiled_recursion()
+    if kernel is None:
+        return _recursion_numpy(ex, hist, levels, drive, rests)
+    k, n_steps = drive.shape
+    index, coef = _factor_columns(ex, hist.shape[1], levels.shape[1])
+    rest = np.stack([np.ones((k, n_steps)) if r is None else r for r in rests], axis=1)
+    return kernel(np.ascontiguousarray(hist, dtype=float), np.ascontiguousarray(levels),
+                  np.ascontiguousarray(drive, dtype=float), np.ascontiguousarray(rest),
+                  ex.phi[::-1].copy(), np.asarray(ex.weights, dtype=float),
+                  np.asarray(ex.gains, dtype=float), index, coef)
+
+
+@functools.cache
+def _compiled_recursion() -> Callable[..., np.ndarray] | None:
+    """Return the numba kernel, or None without numba or with ``FOSMODEL_NUMBA=0``."""
+    if os.environ.get("FOSMODEL_NUMBA", "1") == "0":
+        return None
+    try:
+        from .freerun_numba import recursion
+    except ImportError:
+        return None
+    return recursion
+
+
+def _factor_columns(ex: Expansion, p: int, j: int) -> tuple[np.ndarray, np.ndarray]:
+    """Where each nonlinear term's factors are, and its weight.
+
+    Factor f of term t reads column ``index[t, f]`` of ``[y[n-p] .. y[n-1], levels, 1]``
+    (the 1 where a term has fewer factors than the widest).
+    """
+    width = max(len(t.lags) + len(t.levels) for t in ex.nonlinear)
+    index = np.full((len(ex.nonlinear), width), p + j)
+    for t, term in enumerate(ex.nonlinear):
+        cols = [p - lag for lag in term.lags] + [p + i for i in term.levels]
+        index[t, : len(cols)] = cols
+    return index, np.array([t.coef for t in ex.nonlinear])
+
+
+def _recursion_numpy(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.ndarray,
+                     rests: Sequence[np.ndarray | None]) -> np.ndarray:
+    """Run the recursion of :func:`run_one` one sample of every run at a time.
 
     Each step is a few array operations whatever the number of terms: the
     linear lags and levels as two products, the nonlinear terms as a gather
@@ -268,13 +316,7 @@ def _recursion(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.nd
     y = np.hstack([hist, np.empty((k, n_steps))])
     lv = levels.copy()
     phi = ex.phi[::-1].copy()  # against the window y[n-p .. n-1]
-    width = max(len(t.lags) + len(t.levels) for t in ex.nonlinear)
-    # factor f of term t reads column index[t, f] of [window, levels, 1]
-    index = np.full((len(ex.nonlinear), width), p + j)
-    for t, term in enumerate(ex.nonlinear):
-        cols = [p - lag for lag in term.lags] + [p + i for i in term.levels]
-        index[t, : len(cols)] = cols
-    coef = np.array([t.coef for t in ex.nonlinear])
+    index, coef = _factor_columns(ex, p, j)
     rest = np.stack([np.ones((k, n_steps)) if r is None else r for r in rests], axis=1)
     state = np.ones((k, p + j + 1))
     for step in range(n_steps):
@@ -284,7 +326,7 @@ def _recursion(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.nd
         if j:
             value += lv @ ex.weights
         prod = rest[:, :, step] * coef
-        for f in range(width):
+        for f in range(index.shape[1]):
             prod *= state[:, index[:, f]]
         value += prod.sum(axis=1)
         y[:, n] = value
