@@ -239,3 +239,17 @@ def test_level_series_keeps_recent_series_within_its_budget(monkeypatch):
     long = np.random.default_rng(1).standard_normal(1500)  # longer than the budget: not kept
     assert level_series(long, 1.0, 100.0) is not level_series(long, 1.0, 100.0)
     assert levels._RECENT == []
+
+
+def test_level_series_recognises_an_unpickled_record(monkeypatch):
+    # such a record (a worker's) is passed through as_signal again and again: the cache holds
+    import pickle
+
+    from fosmodel.core import levels
+    from fosmodel.core.validation import as_signal
+
+    monkeypatch.setattr(levels, "_RECENT", [])
+    y = pickle.loads(pickle.dumps(np.random.default_rng(2).standard_normal(300)))
+    first = level_series(as_signal(y, "y"), 1.0, 100.0)
+    assert level_series(as_signal(y, "y"), 1.0, 100.0) is first
+    assert level_series(y, 1.0, 100.0) is first

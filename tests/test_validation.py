@@ -34,3 +34,17 @@ def test_last_checks_only_the_last_samples_and_names_the_absolute_sample():
         as_signal(values, "past", last=5)
     with pytest.raises(InputError, match="first at sample 2"):
         as_signal(values, "past", last=50)  # longer than the signal: all of it
+
+
+def test_an_unpickled_record_passes_as_itself():
+    # an array unpickled on a worker has an equal but distinct float64 dtype object, for which
+    # np.asarray(x, dtype=float) makes a new view each call: caches keyed by the array missed
+    import pickle
+
+    y = pickle.loads(pickle.dumps(np.arange(5.0)))
+    assert np.asarray(y, dtype=float) is not y  # what numpy does
+    assert as_signal(y, "y") is y
+    assert as_signal(y[1:], "y").base is y  # a view is kept as a view, not copied
+    assert as_signal(np.arange(5), "y").dtype == np.float64
+    with pytest.raises(InputError, match="y is complex"):
+        as_signal(np.arange(5) + 1j, "y")

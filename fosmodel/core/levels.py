@@ -34,6 +34,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from .exceptions import InputError
+from .validation import float_array
 
 PREFIX = "level@"
 _NAME_RE = re.compile(r"^level@(?P<tau>[0-9][0-9.]*(?:e[+-]?[0-9]+)?)s$")
@@ -102,7 +103,7 @@ def level_series(y: np.ndarray, tau_s: float, rate: float) -> np.ndarray:
     free-runs the same record with many models, and the recursion over millions
     of samples costs more than the sums that recognise it.
     """
-    y = np.asarray(y, dtype=float)
+    y = float_array(y)
     key = (id(y), len(y), float(y.sum()), float(y[::97].sum()), float(tau_s), float(rate))
     for i, (k, ref, series) in enumerate(_RECENT):
         if k == key and ref is y:
