@@ -38,6 +38,29 @@ def test_the_png_has_300_dpi_and_the_svg_is_written_beside_it(tmp_path):
     assert svg.read_text().lstrip().startswith("<?xml")
 
 
+def test_the_svg_is_drawn_once_in_the_layout_of_the_png(tmp_path):
+    # the PNG's save lays the figure out (one walk without drawing, then the drawing); the
+    # SVG's draws once in that layout, even under rc settings that ask for another engine
+    with matplotlib.rc_context({"figure.autolayout": True}):
+        fig = Figure(figsize=(4.0, 3.0), layout="constrained")
+        ax = fig.subplots()
+        ax.plot([0, 1], [0, 1])
+        ax.set_ylabel("a long label that the layout makes room for")
+        draws, positions = [], []
+        draw = fig.draw
+
+        def counted(renderer):
+            draws.append(type(renderer).__name__)
+            draw(renderer)
+            positions.append(ax.get_position().bounds)
+
+        fig.draw = counted
+        save_figure(fig, tmp_path, "layout")
+    assert draws == ["RendererAgg", "RendererAgg", "MixedModeRenderer"]  # the last: SVG
+    assert positions[1] == positions[2] != (0.125, 0.11, 0.775, 0.77)  # not matplotlib's default
+    assert fig.get_layout_engine() is None
+
+
 @pytest.mark.parametrize(("low", "high"), [(12.2, 18.0), (0.0012, 0.009), (2e-5, 1.5e-4),
                                            (0.05, 2.0)])
 def test_a_log_axis_of_less_than_two_decades_has_plain_tick_labels(tmp_path, low, high):
