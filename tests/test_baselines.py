@@ -380,16 +380,15 @@ def test_make_baseline_maps_the_codes():
         make_baseline("ywm", 2)
 
 
-def test_one_step_prediction_in_blocks_is_the_whole_product(monkeypatch):
-    # the one-step product runs over blocks of rows: blocks of 7 give the same bits as one
-    from numpy.lib.stride_tricks import sliding_window_view
-
+def test_one_step_prediction_in_blocks_is_the_sum_in_the_order_of_the_lags(monkeypatch):
+    # the one-step predictions run over blocks of rows: blocks of 7 give the bits of the
+    # point-by-point sum mu + phi_1 (y[n-1] - mu) + ... + phi_p (y[n-p] - mu)
     from fosmodel.models import dynamics
 
     y = np.random.default_rng(8).standard_normal(500)
     phi, mu = np.array([0.5, -0.2, 0.1]), 0.3
-    whole = np.full(len(y), np.nan)
-    whole[3:] = mu + sliding_window_view(y - mu, 3)[:-1, ::-1] @ phi
     monkeypatch.setattr(dynamics, "_ROWS", 7)
-    np.testing.assert_array_equal(dynamics.ar_one_step(phi, mu, y), whole)
+    np.testing.assert_array_equal(dynamics.ar_one_step(phi, mu, y),
+                                  _explicit_prediction(phi, mu, y))
+    np.testing.assert_array_equal(dynamics.ar_one_step(phi, mu, y[:3]), np.full(3, np.nan))
     np.testing.assert_array_equal(dynamics.ar_one_step(np.empty(0), mu, y), np.full(500, mu))
