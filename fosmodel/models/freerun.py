@@ -264,16 +264,17 @@ def _recursion(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.nd
     Without numba (or with ``FOSMODEL_NUMBA=0`` in the environment) it is
     :func:`_recursion_numpy`, the reference the compiled one is tested against.
     """
+    index, coef = _factor_columns(ex, hist.shape[1], levels.shape[1])
+    ones = np.ones(drive.shape)
+    rest = np.stack([ones if r is None else r for r in rests], axis=1)  # (K, T, H)
+    phi = ex.phi[::-1].copy()  # against the window y[n-p .. n-1]
     kernel = _compiled_recursion()
     if kernel is None:
-        return _recursion_numpy(ex, hist, levels, drive, rests)
-    k, n_steps = drive.shape
-    index, coef = _factor_columns(ex, hist.shape[1], levels.shape[1])
-    rest = np.stack([np.ones((k, n_steps)) if r is None else r for r in rests], axis=1)
+        return _recursion_numpy(ex, hist, levels, drive, rest, phi, index, coef)
     return kernel(np.ascontiguousarray(hist, dtype=float), np.ascontiguousarray(levels),
-                  np.ascontiguousarray(drive, dtype=float), np.ascontiguousarray(rest),
-                  ex.phi[::-1].copy(), np.asarray(ex.weights, dtype=float),
-                  np.asarray(ex.gains, dtype=float), index, coef)
+                  np.ascontiguousarray(drive, dtype=float), rest, phi,
+                  np.asarray(ex.weights, dtype=float), np.asarray(ex.gains, dtype=float),
+                  index, coef)
 
 
 @functools.cache
@@ -303,21 +304,20 @@ def _factor_columns(ex: Expansion, p: int, j: int) -> tuple[np.ndarray, np.ndarr
 
 
 def _recursion_numpy(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.ndarray,
-                     rests: Sequence[np.ndarray | None]) -> np.ndarray:
+                     rest: np.ndarray, phi: np.ndarray, index: np.ndarray,
+                     coef: np.ndarray) -> np.ndarray:
     """Run the recursion of :func:`run_one` one sample of every run at a time.
 
     Each step is a few array operations whatever the number of terms: the
     linear lags and levels as two products, the nonlinear terms as a gather
     of their factors (output lags, levels, or ones where a term has fewer)
-    multiplied column by column.
+    multiplied column by column.  ``rest`` (K, T, H) holds each term's input
+    factors, ``phi`` the weights of the window ``y[n-p] .. y[n-1]``.
     """
     k, n_steps = drive.shape
     p, j = hist.shape[1], levels.shape[1]
     y = np.hstack([hist, np.empty((k, n_steps))])
     lv = levels.copy()
-    phi = ex.phi[::-1].copy()  # against the window y[n-p .. n-1]
-    index, coef = _factor_columns(ex, p, j)
-    rest = np.stack([np.ones((k, n_steps)) if r is None else r for r in rests], axis=1)
     state = np.ones((k, p + j + 1))
     for step in range(n_steps):
         n = p + step

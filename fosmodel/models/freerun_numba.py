@@ -5,7 +5,7 @@ imported and its NumPy recursion otherwise; the two are tested against each othe
 against the sample-by-sample reference :func:`~fosmodel.models.freerun.run_one`.  The NumPy
 recursion spends its time in the overhead of a dozen small array operations per sample of
 an outage (3,000 samples for 30 s at 100 Hz); compiled, a sample is a few multiplications,
-and a model-order study with nonlinear models about the level takes about a fifth less time.
+and a model-order study with nonlinear models about the level takes about a sixth less time.
 
 This module imports numba: import it only where numba is installed.
 """
@@ -19,8 +19,8 @@ from numba import njit
 @njit(cache=True, nogil=True)
 def recursion(hist: np.ndarray, levels: np.ndarray, drive: np.ndarray, rest: np.ndarray,
               phi: np.ndarray, weights: np.ndarray, gains: np.ndarray, index: np.ndarray,
-              coef: np.ndarray) -> np.ndarray:  # pragma: no cover (compiled; see the tests)
-    """Run each row of ``drive`` (K, H) from its state: the NumPy recursion's arguments.
+              coef: np.ndarray) -> np.ndarray:
+    """Run each row of ``drive`` (K, H) from its state (the NumPy recursion's arguments).
 
     ``hist`` (K, p) the centred outputs before the run, oldest first; ``levels`` (K, J);
     ``rest`` (K, T, H) each nonlinear term's input factors; ``phi`` the weights of the
