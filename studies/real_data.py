@@ -16,14 +16,18 @@ clear message where it is absent.  Writes every report, table and figure under
   MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped).
 * The effects the issues point to, checked one by one.
 
-Run: ``python studies/real_data.py [--jobs N]``; the records' reads and Allan analyses and the
-axes' studies and loops run on N worker processes (2 by default).
+Run: ``python studies/real_data.py [--jobs N]``; the records are read on N worker processes
+(2 by default), then their Allan analyses and the axes' studies, loops and temperature checks
+run in one pool of N workers, the longest first.
 """
 
 from __future__ import annotations
 
 import sys
+import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -50,19 +54,29 @@ ADIS = {"gx_dps": ("gyro", "deg/s"), "gy_dps": ("gyro", "deg/s"), "gz_dps": ("gy
 SUNSIDED = {**ADIS}  # same column names and units
 TOMI = {"gx": ("gyro", "deg/s"), "gy": ("gyro", "deg/s"), "gz": ("gyro", "deg/s"),
         "ax": ("accel", "g"), "ay": ("accel", "g"), "az": ("accel", "g")}
-LOOP_ADIS = (1, 2, 3, 4, 5, 6)
-#: Reads, Allan analyses, studies and loops run at once, in worker processes (``--jobs N``;
-#: each is independent, and its numbers are the same whichever process runs it).
+MTIG = {"gyro_x": ("gyro", "rad/s")}
+MTIG_KEEP, MTIG_CLIP = "MTi-G (outliers kept)", "MTi-G (outliers clipped)"
+SUNSIDED_NAME = "MPU-6050 sunsided"
+STUDIED = (*(f"ADIS16405 imu{k}" for k in range(1, 7)), SUNSIDED_NAME, "MPU-6050 tomisuarez2")
+LOOPED = (*STUDIED, MTIG_KEEP, MTIG_CLIP)
+#: Worker processes for the reads and the tasks (``--jobs N``; each task is independent, and
+#: its numbers are the same whichever process runs it).
 JOBS = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 2
 SUNSIDED_FILE = "unmoved-with-x-pointing-forward-10min.csv.gz"
 
 
 def records() -> dict[str, tuple[Record, dict]]:
-    """Every record of the study with the units of its axes (read on the workers)."""
+    """Every record of the study with the units of its axes (read on the workers).
+
+    The MTi-G gyro comes twice: with its outliers kept and clipped.
+    """
+    mtig = DATA / "mtig_contaminated" / "gyro_x.csv.gz"
     reads = {f"ADIS16405 imu{k}": ((DATA / "adis16405" / f"imu{k}.csv.gz",), {"rate": 100},
                                    ADIS) for k in range(1, 7)}
-    reads["MPU-6050 sunsided"] = ((DATA / "mpu6050_sunsided" / SUNSIDED_FILE,),
+    reads[SUNSIDED_NAME] = ((DATA / "mpu6050_sunsided" / SUNSIDED_FILE,),
                                   {"uniform": True}, SUNSIDED)
+    reads[MTIG_KEEP] = ((mtig,), {"rate": 100}, MTIG)
+    reads[MTIG_CLIP] = ((mtig,), {"rate": 100, "outliers": "clip"}, MTIG)
     loaded = in_workers(((_read, (args, options)) for args, options, _ in reads.values()), JOBS)
     out = {name: (rec, axes) for (name, (*_, axes)), rec in zip(reads.items(), loaded)}
     out["MPU-6050 tomisuarez2"] = (load_mpu6050_static(), TOMI)
@@ -75,6 +89,47 @@ def _read(args: tuple, options: dict) -> Record:
 
 def slug(name: str) -> str:
     return name.lower().replace("-", "").replace(" ", "_")
+
+
+# -- one pool for every task ------------------------------------------------------------------
+
+#: A task: its kind, its key (record, axis), the function and its arguments, and the samples
+#: it works through.
+Task = tuple[str, tuple[str, ...], Callable[..., Any], tuple, int]
+#: Seconds per million samples of each kind of task, as a run of this script measured them
+#: (an Allan run per axis).  The pool starts the longest tasks first, so that the last to end
+#: are short ones and no worker waits long for another at the end.
+SECONDS_PER_MILLION = {"allan": 2.3, "loop": 6.0, "study": 5.5, "temperature": 3.0}
+
+
+def run_tasks(tasks: list[Task]) -> dict[tuple[str, tuple[str, ...]], Any]:
+    """Every task's result by kind and key, from one pool of ``JOBS`` workers."""
+    longest_first = sorted(tasks, key=lambda t: -SECONDS_PER_MILLION[t[0]] * t[4])
+    calls = ((_timed, (kind, key, function, args))
+             for kind, key, function, args, _ in longest_first)
+    done = {}
+    for kind, key, result, seconds in in_workers(calls, JOBS, ordered=False):
+        done[kind, key] = result
+        print(f"{kind}: {' '.join(key)} in {seconds:.1f} s{_brief(kind, result)}", flush=True)
+    return done
+
+
+def results_of(tasks: list[Task], done: dict) -> list[Any]:
+    """The results of ``tasks``, in their order."""
+    return [done[kind, key] for kind, key, *_ in tasks]
+
+
+def _timed(kind: str, key: tuple[str, ...], function: Callable[..., Any],
+           args: tuple) -> tuple[str, tuple[str, ...], Any, float]:
+    start = time.perf_counter()
+    result = function(*args)
+    return kind, key, result, time.perf_counter() - start
+
+
+def _brief(kind: str, result: Any) -> str:
+    if kind != "loop":
+        return ""
+    return ": " + ("; ".join(_kept(s) for s in result.steps) or "no effect kept")
 
 
 # -- model-order studies ----------------------------------------------------------------------
@@ -118,15 +173,12 @@ def _study(name: str, axis: str, y: np.ndarray, rate: float, sensor: str,
     return result
 
 
-def run_studies(recs) -> tuple[pd.DataFrame, dict]:
-    items = [(name, axis, rec.column(axis), rec.rate, sensor, units)
-             for name, (rec, axes) in recs.items() for axis, (sensor, units) in axes.items()]
-    rows, kept = [], {}
-    for (name, axis, *_), result in zip(items, in_workers(((_study, i) for i in items), JOBS)):
-        rows.append(study_row(name, axis, result))
-        kept[(name, axis)] = result
-        print(f"study: {name} {axis} done", flush=True)
-    return pd.DataFrame(rows), kept
+def study_tasks(recs) -> list[Task]:
+    """Every axis of the studied records: one study each."""
+    return [("study", (name, axis), _study,
+             (name, axis, rec.column(axis), rec.rate, sensor, units), rec.n_samples)
+            for name in STUDIED for rec, axes in [recs[name]]
+            for axis, (sensor, units) in axes.items()]
 
 
 # -- Allan deviation --------------------------------------------------------------------------
@@ -155,17 +207,13 @@ def allan_row(name: str, axis: str, res, fit) -> dict:
                            and np.isfinite(read["B"]) else np.nan)}
 
 
-def run_allan(recs, mtig: Record) -> pd.DataFrame:
+def allan_tasks(recs) -> list[Task]:
     """Every record's axes in one Allan run each (table, figures, Kalibr/MATLAB/JSON files)."""
-    items = [(name, rec, axes) for name, (rec, axes) in recs.items()]
-    items.append(("MTi-G", mtig, {"gyro_x": ("gyro", "rad/s")}))
-    calls = ((_allan, (name, {c: rec.column(c) for c in units}, rec.rate, rec.source, units))
-             for name, rec, units in items)
-    rows = []
-    for (name, *_), found in zip(items, in_workers(calls, JOBS)):
-        rows += found
-        print(f"allan: {name} done", flush=True)
-    return pd.DataFrame(rows)
+    named = [(name, *recs[name]) for name in STUDIED] + [("MTi-G", *recs[MTIG_KEEP])]
+    return [("allan", (name,), _allan,
+             (name, {c: rec.column(c) for c in units}, rec.rate, rec.source, units),
+             rec.n_samples * len(units))
+            for name, rec, units in named]
 
 
 def _allan(name: str, columns: dict[str, np.ndarray], rate: float, source: str,
@@ -232,20 +280,13 @@ def _kept(step) -> str:
     return step.effect.describe()
 
 
-def run_loops(recs, mtig_keep: Record, mtig_clip: Record) -> tuple[pd.DataFrame, dict]:
-    targets = [(f"ADIS16405 imu{k}", *recs[f"ADIS16405 imu{k}"]) for k in LOOP_ADIS]
-    targets += [(n, *recs[n]) for n in ("MPU-6050 sunsided", "MPU-6050 tomisuarez2")]
-    targets += [("MTi-G (outliers kept)", mtig_keep, {"gyro_x": ("gyro", "rad/s")}),
-                ("MTi-G (outliers clipped)", mtig_clip, {"gyro_x": ("gyro", "rad/s")})]
-    items = [(name, axis, rec.column(axis), {c: rec.column(c) for c in rec.names if c != axis},
-              rec.rate, sensor, units)
-             for name, rec, axes in targets for axis, (sensor, units) in axes.items()]
-    rows, results = [], {}
-    for (name, axis, *_), res in zip(items, in_workers(((_loop, i) for i in items), JOBS)):
-        rows.append(loop_row(name, axis, res))
-        results[(name, axis)] = res
-        print(f"loop: {name} {axis}: {rows[-1]['Effects kept']}", flush=True)
-    return pd.DataFrame(rows), results
+def loop_tasks(recs) -> list[Task]:
+    """Every axis of the looped records: one residual loop each, the other axes its channels."""
+    return [("loop", (name, axis), _loop,
+             (name, axis, rec.column(axis), {c: rec.column(c) for c in rec.names if c != axis},
+              rec.rate, sensor, units), rec.n_samples)
+            for name in LOOPED for rec, axes in [recs[name]]
+            for axis, (sensor, units) in axes.items()]
 
 
 def _loop(name: str, axis: str, y: np.ndarray, others: dict[str, np.ndarray], rate: float,
@@ -259,28 +300,33 @@ def _loop(name: str, axis: str, y: np.ndarray, others: dict[str, np.ndarray], ra
 # -- the effects the issue points to -----------------------------------------------------------
 
 
-def temperature_check(rec: Record) -> pd.DataFrame:
-    """MPU-6050 (sunsided): what adding the die temperature does, axis by axis."""
-    temp = rec.column("temp_c")
-    n10 = int(10 * rec.rate)
+def temperature_tasks(recs) -> list[Task]:
+    """MPU-6050 (sunsided): what adding the die temperature does, one task per axis."""
+    rec = recs[SUNSIDED_NAME][0]
+    return [("temperature", (axis,), _temperature,
+             (axis, rec.column(axis), rec.column("temp_c"), rec.rate, sensor, units),
+             rec.n_samples)
+            for axis, (sensor, units) in SUNSIDED.items()]
+
+
+def _temperature(axis: str, y: np.ndarray, temp: np.ndarray, rate: float, sensor: str,
+                 units: str) -> dict:
+    """The starting model's scores with and without the die temperature, and their ratios."""
+    n10 = int(10 * rate)
     m = len(temp) // n10 * n10
-    rows = []
-    for axis, (sensor, units) in SUNSIDED.items():
-        y = rec.column(axis)
-        config = LoopConfig(rate=rec.rate, sensor=sensor, units=units)
-        channels = {"temp_c": temp}
-        base = score_family(y, channels, config, CandidateFamily(config.max_lag))
-        family = CandidateFamily(config.max_lag).add(
-            Effect("aux", channel="temp_c", max_lag=2), channels, len(y), rec.rate,
-            slice(0, round(config.train * len(y))))
-        warm = score_family(y, channels, config, family)
-        means = y[:m].reshape(-1, n10).mean(axis=1), temp[:m].reshape(-1, n10).mean(axis=1)
-        rows.append({"Axis": axis, "corr(10 s means, temp_c)": np.corrcoef(*means)[0, 1],
-                     "One-step MSE change": warm["mse"] / base["mse"] - 1,
-                     "30 s bias RMS change": warm["bias_rms"]["30"] / base["bias_rms"]["30"] - 1,
-                     "30 s outage position change": warm["outage_position_error_m"]
-                     / base["outage_position_error_m"] - 1})
-    return pd.DataFrame(rows)
+    config = LoopConfig(rate=rate, sensor=sensor, units=units)
+    channels = {"temp_c": temp}
+    base = score_family(y, channels, config, CandidateFamily(config.max_lag))
+    family = CandidateFamily(config.max_lag).add(
+        Effect("aux", channel="temp_c", max_lag=2), channels, len(y), rate,
+        slice(0, round(config.train * len(y))))
+    warm = score_family(y, channels, config, family)
+    means = y[:m].reshape(-1, n10).mean(axis=1), temp[:m].reshape(-1, n10).mean(axis=1)
+    return {"Axis": axis, "corr(10 s means, temp_c)": np.corrcoef(*means)[0, 1],
+            "One-step MSE change": warm["mse"] / base["mse"] - 1,
+            "30 s bias RMS change": warm["bias_rms"]["30"] / base["bias_rms"]["30"] - 1,
+            "30 s outage position change": warm["outage_position_error_m"]
+            / base["outage_position_error_m"] - 1}
 
 
 def band_ratio(res: LoopResult, rate: float, lo: float, hi: float) -> tuple[float, float]:
@@ -295,7 +341,7 @@ def named_effects(loops: dict, recs, mtig_keep: Record, temp: pd.DataFrame) -> l
     """One sentence per effect of the issue's list, from this run's numbers."""
     lines = []
     ay = temp.set_index("Axis").loc["ay_g"]
-    loop_ay = loops[("MPU-6050 sunsided", "ay_g")]
+    loop_ay = loops[(SUNSIDED_NAME, "ay_g")]
     took = any(s.effect.channel == "temp_c" for s in loop_ay.steps)
     lines.append(
         f"- **MPU-6050 die temperature.** The 10 s means of ay correlate with temp_c at "
@@ -399,18 +445,21 @@ def main() -> None:
         print(f"skipping: {DATA} not found (the real recordings are not part of this "
               "repository; see the README's 'Data and licences')")
         return
+    allan_only = "--allan" in sys.argv[1:]
     recs = records()
-    mtig_keep = load_record(DATA / "mtig_contaminated" / "gyro_x.csv.gz", rate=100)
     OUT.mkdir(parents=True, exist_ok=True)
-    write_allan_section(run_allan(recs, mtig_keep))
-    if "--allan" in sys.argv[1:]:
+    allan, studied, looped, temperature = (allan_tasks(recs), study_tasks(recs),
+                                           loop_tasks(recs), temperature_tasks(recs))
+    done = run_tasks(allan if allan_only else allan + studied + looped + temperature)
+    write_allan_section(pd.DataFrame([row for rows in results_of(allan, done) for row in rows]))
+    if allan_only:
         print(f"section real-allan of docs/pages/real-data.md rewritten; results in {OUT}")
         return
-    mtig_clip = load_record(DATA / "mtig_contaminated" / "gyro_x.csv.gz", rate=100,
-                            outliers="clip")
-    studies, results = run_studies(recs)
-    loops, loop_results = run_loops(recs, mtig_keep, mtig_clip)
-    temp = temperature_check(recs["MPU-6050 sunsided"][0])
+    results = dict(zip((t[1] for t in studied), results_of(studied, done)))
+    loop_results = dict(zip((t[1] for t in looped), results_of(looped, done)))
+    studies = pd.DataFrame([study_row(*key, result) for key, result in results.items()])
+    loops = pd.DataFrame([loop_row(*key, res) for key, res in loop_results.items()])
+    temp = pd.DataFrame(results_of(temperature, done))
     for frame, stem in ((studies, "studies"), (loops, "loops"), (temp, "temperature")):
         frame.to_csv(OUT / f"{stem}.csv", index=False)
     example = paper_table(results[("ADIS16405 imu1", "ay_g")])
@@ -429,7 +478,7 @@ def main() -> None:
         *loop_lines(loops), "",
         markdown_table(loops, digits=3), "",
         "**The effects the issue points to**, checked:", "",
-        *named_effects(loop_results, recs, mtig_keep, temp), "",
+        *named_effects(loop_results, recs, recs[MTIG_KEEP][0], temp), "",
         "MPU-6050 (sunsided) with its die temperature added, prediction segment:", "",
         markdown_table(temp, digits=3)]))
     print(f"section real-data of docs/pages/real-data.md rewritten; results in {OUT}")
