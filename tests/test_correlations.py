@@ -138,3 +138,29 @@ def test_pooled_segments_match_reference_on_the_stacked_windows():
     ref = DataCorrelations(np.vstack([evaluate_terms(terms, p, n0) for p in pieces]),
                            np.concatenate([p["y"][n0:] for p in pieces]))
     _assert_matches(fast, ref)
+
+
+@pytest.mark.parametrize("spec", [SPECS[1], SPECS[2], SPECS[4]],
+                         ids=lambda s: f"L{s.max_lag}CP{s.degree}")
+@pytest.mark.parametrize("blocked", [False, True])
+def test_offsets_give_the_sums_of_the_centred_signals_to_the_bit(spec, blocked, monkeypatch):
+    # a long window subtracts the offsets block by block (no centred copy of the record), a
+    # short one once: either way every mean equals that of the centred signals exactly
+    if blocked:
+        monkeypatch.setattr(correlations, "_BLOCKED_SAMPLES", 0)
+        monkeypatch.setattr(correlations, "_BLOCK", 7)
+        monkeypatch.setattr(correlations, "_GEMM_SAMPLES", 0)  # the weighted Gram too
+        monkeypatch.setattr(correlations, "_CHUNK", 37)
+    signals = _signals(400, 6)
+    offsets = {k: float(v.mean()) for k, v in signals.items() if k != "b"}  # b left as it is
+    centred = {k: v - offsets.get(k, 0.0) for k, v in signals.items()}
+    terms = [t for t in generate_terms(spec) if not t.is_constant]
+    n0 = spec.lag_window
+    lazy = LagCorrelations(terms, signals, n0, offsets=offsets)
+    eager = LagCorrelations(terms, centred, n0)
+    for name in ("y_mean", "y_mean_sq", "means", "target", "diag"):
+        np.testing.assert_array_equal(getattr(lazy, name), getattr(eager, name))
+    for j in range(len(terms)):
+        np.testing.assert_array_equal(lazy.column(j), eager.column(j))
+    if blocked:  # the caller's arrays themselves, no centred copies
+        assert all(any(np.shares_memory(u, v) for v in signals.values()) for u in lazy._signals)

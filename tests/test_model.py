@@ -462,3 +462,59 @@ def test_the_summary_gives_the_criteria_and_renders_as_html_and_latex():
     assert "\\begin{tabular}" in latex and "Variance explained" in latex
     assert "\\%" in latex and " %" not in latex.replace("\\%", "")  # every % escaped
     assert "y[n-1]" in latex or "y[n-2]" in latex or "y[n-3]" in latex
+
+
+def _long_fit_inputs():
+    """A record with a channel, an exactly constant column and two given levels."""
+    from fosmodel.core.levels import level_name, level_series
+
+    rng = np.random.default_rng(11)
+    n = 6000
+    u = rng.standard_normal(n)
+    y = 3.0 + np.cumsum(rng.standard_normal(n)) * 0.01 + 0.4 * np.roll(u, 1) + \
+        rng.standard_normal(n)
+    exog = {"u": u, "c": np.full(n, 2.5)}
+    exog.update({level_name(tau): level_series(y, tau, 50.0) for tau in (0.5, 4.0)})
+    kwargs = dict(max_lag=4, degree=2, exog_lags={"u": 2}, columns=["c"], levels=[0.5, 4.0],
+                  rate=50.0, max_terms=10, stop="max_terms")
+    return y, exog, kwargs
+
+
+def test_a_long_fit_centres_block_by_block_with_the_same_weights_to_the_bit(monkeypatch):
+    # over _BLOCKED_SAMPLES, the fit hands LagCorrelations the record and its offsets, not
+    # centred copies; the model is the one centring everything first gives, to the bit
+    from fosmodel.core import correlations, fos
+    from fosmodel.models import model as model_module
+
+    monkeypatch.setattr(correlations, "_BLOCKED_SAMPLES", 0)
+    monkeypatch.setattr(correlations, "_BLOCK", 500)
+    y, exog, kwargs = _long_fit_inputs()
+    lazy = FOSModel(**kwargs).fit(y, exog)
+    monkeypatch.setattr(model_module, "deferred_center",
+                        lambda a: (fos.center(a)[0], float(a.mean()), 0.0))
+    eager = FOSModel(**kwargs).fit(y, exog)
+    assert lazy.terms_ == eager.terms_
+    assert "c" not in " ".join(lazy.terms_)  # the constant column, exactly zero, is dependent
+    np.testing.assert_array_equal(lazy.coef_, eager.coef_)
+    assert lazy.intercept_ == eager.intercept_
+    assert lazy.offsets_ == eager.offsets_
+
+
+def test_a_long_fit_makes_no_centred_copy_of_the_record(monkeypatch):
+    import tracemalloc
+
+    from fosmodel.core import correlations
+
+    monkeypatch.setattr(correlations, "_BLOCKED_SAMPLES", 0)
+    monkeypatch.setattr(correlations, "_BLOCK", 4096)
+    rng = np.random.default_rng(12)
+    y = np.cumsum(rng.standard_normal(400_000)) * 0.01 + rng.standard_normal(400_000) + 5.0
+    kwargs = dict(max_lag=6, degree=2, max_terms=8, stop="max_terms")
+    FOSModel(**kwargs).fit(y)  # caches and plans first
+    tracemalloc.start()
+    try:
+        FOSModel(**kwargs).fit(y)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 0.5 * y.nbytes  # a centred copy alone would be y.nbytes

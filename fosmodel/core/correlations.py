@@ -84,6 +84,12 @@ class LagCorrelations:
     table_degree : int
         Moments up to this degree come from shape tables; higher ones are
         summed directly.  0 sums everything directly.
+    offsets : mapping of str to float, optional
+        Subtracted from the named signals before any product (their centring).
+        A window summed in blocks subtracts them block by block, so that no
+        centred copy of a record-long signal is made; a shorter window centres
+        each signal once.  Either way the products, and the sums, are the same
+        as from the centred signals.
     """
 
     def __init__(
@@ -93,6 +99,7 @@ class LagCorrelations:
         start: int,
         *,
         table_degree: int = 3,
+        offsets: Mapping[str, float] | None = None,
     ) -> None:
         plan = layout(tuple(t.factors for t in terms), start, table_degree)
         n, n0 = len(signals[OUTPUT]), start
@@ -100,6 +107,13 @@ class LagCorrelations:
         self.n_samples = n - n0
         self._geometry = plan.geometry
         self._signals = [np.ascontiguousarray(signals[ch], dtype=float) for ch in plan.names]
+        shift = [float((offsets or {}).get(ch, 0.0)) for ch in plan.names]
+        if self.n_samples > _BLOCKED_SAMPLES:
+            self._offsets = shift
+            self._centred_block: tuple[int, int, dict[int, np.ndarray]] = (0, 0, {})
+        else:
+            self._signals = [u - m if m else u for u, m in zip(self._signals, shift)]
+            self._offsets = [0.0] * len(shift)
         self._cand_ch, self._cand_lag, self._cand_lmin = plan.ch, plan.lag, plan.lmin
         self._squares: dict[int, np.ndarray] = {}
         self._table_keys = np.empty(0, dtype=np.int64)  # tabulated shape keys, sorted
@@ -161,8 +175,25 @@ class LagCorrelations:
         return out / self.n_samples
 
     def _factor(self, ch: int, rel: int, lo: int, hi: int) -> np.ndarray:
-        """u_ch(t - rel) for t = lo..hi-1, a view (needs lo >= rel)."""
-        return self._signals[ch][lo - rel : hi - rel]
+        """u_ch(t - rel) for t = lo..hi-1 (needs lo >= rel), a view: do not write into it.
+
+        A signal with an offset is centred once per block of the window (see
+        :meth:`_enter_block`), the view taken from that; a range outside the block, anew.
+        """
+        values, offset = self._signals[ch][lo - rel : hi - rel], self._offsets[ch]
+        if not offset:
+            return values
+        start, stop, centred = self._centred_block
+        if not start <= lo - rel <= hi - rel <= stop:
+            return values - offset
+        if ch not in centred:
+            centred[ch] = self._signals[ch][start:stop] - offset
+        return centred[ch][lo - rel - start : hi - rel - start]
+
+    def _enter_block(self, lo: int, hi: int) -> None:
+        """Make the block ``lo..hi-1`` (and the lag window before it) the one centred."""
+        if self.n_samples > _BLOCKED_SAMPLES:
+            self._centred_block = (max(lo - self._n0, 0), hi, {})
 
     def _power(self, ch: int | None, rel: int, k: int, lo: int, hi: int) -> np.ndarray:
         """u_ch(t - rel)^k (k = 1 or 2) for t = lo..hi-1.
@@ -201,8 +232,8 @@ class LagCorrelations:
         n0 = self._n0
         near = np.zeros((len(self._signals) + 1, 2 * n0))  # near[ch, m] = u_ch(lo - N0 + m)
         skip = max(n0 - lo, 0)
-        for row, u in zip(near, self._signals):
-            row[skip:] = u[lo - n0 + skip : lo + n0]
+        for row, u, offset in zip(near, self._signals, self._offsets):
+            row[skip:] = u[lo - n0 + skip : lo + n0] - offset
         near[-1] = 1.0
         return near[:, _edge_index(n0)]
 
@@ -234,6 +265,7 @@ class LagCorrelations:
         sums = np.zeros(len(new.ch))
         # the product of each group's leading factors over a block, shared depth-first
         for lo, hi in self._blocks():
+            self._enter_block(lo, hi)
             for prefix, prefix_product in self._walk(new.groups, lo, hi):
                 for (ch, k), (rows, rels) in new.groups[prefix].items():
                     sums[rows] += self._lagged_sums(prefix_product, ch, k, rels, lo, hi)
@@ -293,6 +325,7 @@ class LagCorrelations:
         groups = direct_groups(ch, lag)
         out = np.zeros(len(ch))
         for lo, hi in self._blocks():
+            self._enter_block(lo, hi)
             root = None if weight is None else self._product(*weight, lo, hi)
             for prefix, prefix_product in self._walk(groups, lo, hi, root):
                 for (c, k), (rows, lags) in groups[prefix].items():

@@ -420,6 +420,19 @@ def center(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return out, mean
 
 
+def deferred_center(a: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """Return ``(values, mean, offset)``: a signal, its mean, and what is left to subtract.
+
+    ``values - offset`` is :func:`center` of the 1-D ``a``, to the bit, without the copy:
+    ``a`` itself with its mean to subtract, or zeros with nothing left when ``a`` is exactly
+    constant (which :func:`center` makes exactly zero).
+    """
+    mean = float(a.mean())
+    if len(a) and a[0] == a[-1] and np.ptp(a) == 0:
+        return np.zeros_like(a), mean, 0.0
+    return a, mean, mean
+
+
 def _as_finite(a: ArrayLike, name: str, ndim: int) -> np.ndarray:
     if np.iscomplexobj(a):
         raise InputError(f"{name} is complex; FOS models real signals")

@@ -42,7 +42,15 @@ from ..core.candidates import (
 from ..core.correlations import LagCorrelations, PooledCorrelations
 from ..core.derived import channels_read, derive, is_derived
 from ..core.exceptions import FitWarning, InputError
-from ..core.fos import Correlations, DataCorrelations, StopRule, center, criterion, fos_search
+from ..core.fos import (
+    Correlations,
+    DataCorrelations,
+    StopRule,
+    center,
+    criterion,
+    deferred_center,
+    fos_search,
+)
 from ..core.levels import (
     check_level_rate,
     check_level_series,
@@ -295,15 +303,15 @@ class FOSModel(BaseEstimator):
             raise InputError(f"y is constant ({y_arr[0]:g}): there is nothing to model")
         channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
         _refuse_own_input(y_arr, channels)
-        signals, offsets = self._centred({OUTPUT: y_arr, **channels}, None)
-        if segments is None:
-            signals.update(self._given_levels(exog, y_arr, offsets[OUTPUT]))
+        signals, offsets, pending = self._fit_signals(
+            {OUTPUT: y_arr, **channels},
+            self._given_levels(exog, y_arr, None) if segments is None else {}, spec)
         terms = [t for t in generate_terms(spec) if not t.is_constant]
         pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, spec) for s in runs]
         corr: Correlations
         if self.correlations == "fast":
             with one_blas_thread():  # short products: threads cost more than they give
-                parts = [LagCorrelations(terms, piece, n0) for piece in pieces]
+                parts = [LagCorrelations(terms, piece, n0, offsets=pending) for piece in pieces]
                 corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
                 res = fos_search(corr, rule, intercept=True,
                                   dependence_tol=self.dependence_tol)
@@ -359,18 +367,39 @@ class FOSModel(BaseEstimator):
             return dict(signals)
         return with_levels(signals, missing, self._level_rate(), OUTPUT)
 
-    def _given_levels(self, exog: Exog | None, y: np.ndarray, mu: float,
+    def _given_levels(self, exog: Exog | None, y: np.ndarray, mu: float | None,
                       lo: int = 0) -> dict[str, np.ndarray]:
         """Return the level series passed in ``exog`` (of the raw output), checked.
 
-        They are centred by ``mu`` and cut from sample ``lo`` on.
+        They are cut from sample ``lo`` on and centred by ``mu`` (None: as given).
         """
         if exog is None:
             return {}
         names = [n for n in self.candidate_spec().level_names if n in set(map(str, exog.keys()))]
-        return {n: check_level_series(np.asarray(exog[n], dtype=float), y, checked_level_tau(n),
-                                      self._level_rate(), n)[lo:] - mu
-                for n in names}
+        levels = {n: check_level_series(np.asarray(exog[n], dtype=float), y, checked_level_tau(n),
+                                        self._level_rate(), n)[lo:] for n in names}
+        return levels if mu is None else {n: v - mu for n, v in levels.items()}
+
+    def _fit_signals(
+        self, signals: dict[str, np.ndarray], levels: dict[str, np.ndarray], spec: CandidateSpec,
+    ) -> tuple[dict[str, np.ndarray], dict[str, float], dict[str, float]]:
+        """Return the fit's signals with given ``levels``, their offsets and those left to subtract.
+
+        With the fast correlations, and no level to compute from the centred output,
+        the signals stay as they are and :class:`LagCorrelations` subtracts the offsets
+        (the third dict), block by block on a long record: the fit then makes no centred
+        copy of the record.  Otherwise they are centred here and nothing is left.
+        """
+        if self.correlations != "fast" or any(n not in levels for n in spec.level_names):
+            centred, offsets = self._centred(signals, None)
+            return {**centred, **{n: v - offsets[OUTPUT] for n, v in levels.items()}}, offsets, {}
+        if not self.center:
+            return {**signals, **levels}, {k: 0.0 for k in signals}, {}
+        out, offsets, pending = {}, {}, {}
+        for name, values in signals.items():
+            out[name], offsets[name], pending[name] = deferred_center(values)
+        pending.update({n: offsets[OUTPUT] for n in levels})
+        return {**out, **levels}, offsets, pending
 
     def _set_state(self, values: Mapping[str, object]) -> None:
         """Set the fitted state of :data:`_FITTED_STATE` (each ``name`` as ``name_``), all of it."""
