@@ -213,6 +213,32 @@ def test_a_long_prediction_in_blocks_equals_the_one_pass(monkeypatch, start, as_
     np.testing.assert_array_equal(fit.predict(y, {"temp": temp}, start=start), whole)
 
 
+@pytest.mark.parametrize("degree", [1, 2])  # the linear runs' superposition, the recursion
+def test_free_runs_over_a_long_record_in_groups_equal_the_one_call(monkeypatch, degree):
+    from fosmodel.models import model as model_module
+
+    y, temp = _record(6000)
+    fit = FOSModel(max_lag=4, degree=degree, levels=[0.5, 5.0], rate=RATE,
+                   exog_lags={"temp": 2}, max_terms=10, stop="max_terms")
+    fit.fit(y, {"temp": temp})
+    assert any("level" in t for t in fit.terms_)
+    exog = {"temp": temp, **{level_name(t): level_series(y, t, RATE) for t in (0.5, 5.0)}}
+    starts = np.r_[5000, np.arange(10, 5800, 397), 3001, 407]  # out of order, with a repeat
+    whole = fit.free_runs(y, starts, 150, exog)
+    calls = []
+    one_call = model_module.FOSModel.free_runs
+    monkeypatch.setattr(model_module.FOSModel, "free_runs",
+                        lambda self, *a: calls.append(a[1]) or one_call(self, *a))
+    monkeypatch.setattr(model_module, "_PREDICT_ROWS", 1000)  # groups of runs within 1000 samples
+    groups = fit.free_runs(y, starts, 150, exog)
+    np.testing.assert_array_equal(groups, whole)
+    spans = [s.max() + 150 - (s.min() - fit.lag_window_) for s in calls[1:]]
+    assert len(calls) == 6 and max(spans) <= 1000  # five groups
+    assert sorted(np.concatenate(calls[1:]).tolist()) == sorted(starts.tolist())
+    # a level not given is computed over the record's whole past: one call, as before
+    np.testing.assert_array_equal(fit.free_runs(y, starts, 150, {"temp": temp}), whole)
+
+
 def test_a_channel_of_another_length_is_named_in_a_long_prediction(monkeypatch):
     from fosmodel.models import model as model_module
 

@@ -576,10 +576,16 @@ def _residual(model: BoundModel, y: np.ndarray, segments: Split) -> np.ndarray:
     return (y[:stop] - model.predict(y[:stop]))[model.lag_window_:]
 
 
-def _fast(x: np.ndarray, rate: float, slow_s: float) -> np.ndarray:
-    """``x`` minus its centred moving mean over ``slow_s`` seconds."""
+def _fast(x: np.ndarray, rate: float, slow_s: float,
+          out: np.ndarray | None = None) -> np.ndarray:
+    """``x`` minus its centred moving mean over ``slow_s`` seconds (written into ``out``).
+
+    The mean is computed into ``out`` (a new array if None) and subtracted there: one
+    array of ``x``'s length, not two.
+    """
     width = max(3, round(slow_s * rate))
-    return x - uniform_filter1d(x, width, mode="nearest")
+    mean = uniform_filter1d(x, width, mode="nearest", output=out)
+    return np.subtract(x, mean, out=mean)
 
 
 class _Diagnostics:
@@ -621,9 +627,11 @@ class _Diagnostics:
     def _nonlinearity(self, fast: np.ndarray, n0: int) -> Finding:
         """Test the residual for products of the fast parts of the lagged outputs."""
         config, stop = self.config, self.stop
-        # filtered one lag at a time: the filter of the whole matrix holds two more copies of it
-        lagged = np.column_stack([_fast(self.y[n0 - k : stop - k], config.rate, config.slow_s)
-                                  for k in range(1, config.nonlinear_lags + 1)])
+        # filtered one lag at a time into the matrix: the filter of the whole matrix, or a
+        # stack of the filtered columns, would hold two copies of it
+        lagged = np.empty((stop - n0, config.nonlinear_lags))
+        for k in range(1, config.nonlinear_lags + 1):
+            _fast(self.y[n0 - k : stop - k], config.rate, config.slow_s, out=lagged[:, k - 1])
         return nonlinearity(fast, lagged, alpha=config.alpha)
 
 

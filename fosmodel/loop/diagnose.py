@@ -119,7 +119,9 @@ def bin_means(x: np.ndarray, r: np.ndarray, bins: int = 20) -> tuple[np.ndarray,
     A quantised ``x`` repeats edges, whose bins drop.
     """
     edges = np.unique(np.quantile(x, np.linspace(0, 1, bins + 1)))
-    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, max(len(edges) - 2, 0))
+    idx = np.searchsorted(edges, x, side="right")  # one array of x's length, worked in place
+    idx -= 1
+    np.clip(idx, 0, max(len(edges) - 2, 0), out=idx)
     count = np.bincount(idx)
     kept = count > 0
     return (np.bincount(idx, weights=x)[kept] / count[kept],

@@ -72,10 +72,15 @@ def forecasts(model: OneStepModel, y: np.ndarray, segment: slice, starts: np.nda
               horizon: int) -> Forecasts:
     """Return the one-step and outage errors of ``model`` on ``segment`` of the record ``y``."""
     stop = segment.stop
-    pred = (model.predict(y[:stop], start=segment.start) if isinstance(model, BoundModel)
-            else model.predict(y[:stop]))
-    one_step = y[segment] - np.asarray(pred, dtype=float)[segment]
+    one_step = y[segment] - _prediction(model, y[:stop], segment.start)[segment]
+    # the prediction, as long as the record, is gone before the free runs begin
     return Forecasts(one_step, free_run_errors(model, y[:stop], starts, horizon))
+
+
+def _prediction(model: OneStepModel, y: np.ndarray, start: int) -> np.ndarray:
+    """``model``'s one-step prediction of ``y`` (from ``start`` on where it can)."""
+    pred = model.predict(y, start=start) if isinstance(model, BoundModel) else model.predict(y)
+    return np.asarray(pred, dtype=float)
 
 
 def compare(a: Forecasts, b: Forecasts, alpha: float) -> dict:

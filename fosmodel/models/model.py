@@ -711,7 +711,7 @@ class FOSModel(BaseEstimator):
         return np.array(out)
 
     def free_runs(
-        self, y: ArrayLike, starts: Sequence[int], n_steps: int,
+        self, y: ArrayLike, starts: Sequence[int] | np.ndarray, n_steps: int,
         exog: Exog | None = None,
     ) -> np.ndarray:
         """Free runs of ``n_steps`` samples from the true past ``y[:s]``, each ``s`` in ``starts``.
@@ -733,6 +733,8 @@ class FOSModel(BaseEstimator):
             raise InputError(f"free runs of {n_steps} samples from starts {s.min()}..{s.max()} "
                              f"need samples {n0}..{s.max() + n_steps - 1}; y has {n}")
         lo = int(s.min()) - n0  # nothing before reaches a run (the levels come with the signals)
+        if len(s) > 1 and s.max() + n_steps - lo > _PREDICT_ROWS and self._blockable(exog, n):
+            return self._free_runs_in_groups(y, s, n_steps, exog)
         signals = self._signals_from(y, exog, lo)
         s = s - lo
         ex = self._expansion
@@ -745,6 +747,29 @@ class FOSModel(BaseEstimator):
         rests = [None if t.rest is None else evaluate_sum([t.rest], [1.0], signals, n0)[steps - n0]
                  for t in ex.nonlinear]
         return run_many(ex, past, levels, drive, rests) + self.offsets_[OUTPUT]
+
+    def _free_runs_in_groups(self, y: ArrayLike, starts: np.ndarray, n_steps: int,
+                             exog: Exog | None) -> np.ndarray:
+        """:meth:`free_runs` from starts spread over a long record, a group of them at a time.
+
+        A group's runs and their past span at most ``_PREDICT_ROWS`` samples, so it holds
+        copies of that many samples of the signals, not of the record's; each run is
+        computed from the same samples as in one call.
+        """
+        y_arr = np.asarray(y, dtype=float)
+        columns = {k: np.asarray(v) for k, v in exog.items()} if exog is not None else None
+        order = np.argsort(starts, kind="stable")
+        ordered = starts[order]
+        out = np.empty((len(starts), n_steps))
+        first = 0
+        while first < len(order):
+            reach = ordered[first] - self.lag_window_ + _PREDICT_ROWS - n_steps
+            last = max(int(np.searchsorted(ordered, reach, side="right")), first + 1)
+            group, hi = order[first:last], int(ordered[last - 1]) + n_steps
+            cut = {k: v[:hi] for k, v in columns.items()} if columns is not None else None
+            out[group] = self.free_runs(y_arr[:hi], ordered[first:last], n_steps, cut)
+            first = last
+        return out
 
     # -- reporting and persistence -------------------------------------------------------
 
