@@ -73,8 +73,8 @@ def records() -> dict[str, tuple[Record, dict]]:
     mtig = DATA / "mtig_contaminated" / "gyro_x.csv.gz"
     reads = {f"ADIS16405 imu{k}": ((DATA / "adis16405" / f"imu{k}.csv.gz",), {"rate": 100},
                                    ADIS) for k in range(1, 7)}
-    reads[SUNSIDED_NAME] = ((DATA / "mpu6050_sunsided" / SUNSIDED_FILE,),
-                                  {"uniform": True}, SUNSIDED)
+    reads[SUNSIDED_NAME] = ((DATA / "mpu6050_sunsided" / SUNSIDED_FILE,), {"uniform": True},
+                            SUNSIDED)
     reads[MTIG_KEEP] = ((mtig,), {"rate": 100}, MTIG)
     reads[MTIG_CLIP] = ((mtig,), {"rate": 100, "outliers": "clip"}, MTIG)
     loaded = in_workers(((_read, (args, options)) for args, options, _ in reads.values()), JOBS)
@@ -93,18 +93,28 @@ def slug(name: str) -> str:
 
 # -- one pool for every task ------------------------------------------------------------------
 
-#: A task: its kind, its key (record, axis), the function and its arguments, and the samples
-#: it works through.
-Task = tuple[str, tuple[str, ...], Callable[..., Any], tuple, int]
-#: Seconds per million samples of each kind of task, as a run of this script measured them
-#: (an Allan run per axis).  The pool starts the longest tasks first, so that the last to end
-#: are short ones and no worker waits long for another at the end.
-SECONDS_PER_MILLION = {"allan": 2.3, "loop": 6.0, "study": 5.5, "temperature": 3.0}
+#: A task: its kind, its key (record, axis), the function and its arguments, and the seconds
+#: it is expected to take (:func:`expected_s`).
+Task = tuple[str, tuple[str, ...], Callable[..., Any], tuple, float]
+#: Seconds per axis of each kind of task: a part for its report and figures, and a part per
+#: million samples, as a run of this script measured them (ADIS16405, MPU-6050 and MTi-G).
+SECONDS = {"allan": (1.1, 0.4), "loop": (1.8, 5.0), "study": (2.5, 3.5),
+           "temperature": (0.05, 0.0)}
+
+
+def expected_s(kind: str, n_samples: int, axes: int = 1) -> float:
+    """How long a task of ``kind`` on ``axes`` axes of ``n_samples`` samples takes, roughly."""
+    report, per_million = SECONDS[kind]
+    return axes * (report + per_million * n_samples / 1e6)
 
 
 def run_tasks(tasks: list[Task]) -> dict[tuple[str, tuple[str, ...]], Any]:
-    """Every task's result by kind and key, from one pool of ``JOBS`` workers."""
-    longest_first = sorted(tasks, key=lambda t: -SECONDS_PER_MILLION[t[0]] * t[4])
+    """Every task's result by kind and key, from one pool of ``JOBS`` workers.
+
+    The longest start first, so that the last to end are short ones and no worker waits
+    long for the other at the end.
+    """
+    longest_first = sorted(tasks, key=lambda t: -t[4])
     calls = ((_timed, (kind, key, function, args))
              for kind, key, function, args, _ in longest_first)
     done = {}
@@ -176,7 +186,8 @@ def _study(name: str, axis: str, y: np.ndarray, rate: float, sensor: str,
 def study_tasks(recs) -> list[Task]:
     """Every axis of the studied records: one study each."""
     return [("study", (name, axis), _study,
-             (name, axis, rec.column(axis), rec.rate, sensor, units), rec.n_samples)
+             (name, axis, rec.column(axis), rec.rate, sensor, units),
+             expected_s("study", rec.n_samples))
             for name in STUDIED for rec, axes in [recs[name]]
             for axis, (sensor, units) in axes.items()]
 
@@ -212,7 +223,7 @@ def allan_tasks(recs) -> list[Task]:
     named = [(name, *recs[name]) for name in STUDIED] + [("MTi-G", *recs[MTIG_KEEP])]
     return [("allan", (name,), _allan,
              (name, {c: rec.column(c) for c in units}, rec.rate, rec.source, units),
-             rec.n_samples * len(units))
+             expected_s("allan", rec.n_samples, len(units)))
             for name, rec, units in named]
 
 
@@ -284,7 +295,7 @@ def loop_tasks(recs) -> list[Task]:
     """Every axis of the looped records: one residual loop each, the other axes its channels."""
     return [("loop", (name, axis), _loop,
              (name, axis, rec.column(axis), {c: rec.column(c) for c in rec.names if c != axis},
-              rec.rate, sensor, units), rec.n_samples)
+              rec.rate, sensor, units), expected_s("loop", rec.n_samples))
             for name in LOOPED for rec, axes in [recs[name]]
             for axis, (sensor, units) in axes.items()]
 
@@ -305,7 +316,7 @@ def temperature_tasks(recs) -> list[Task]:
     rec = recs[SUNSIDED_NAME][0]
     return [("temperature", (axis,), _temperature,
              (axis, rec.column(axis), rec.column("temp_c"), rec.rate, sensor, units),
-             rec.n_samples)
+             expected_s("temperature", rec.n_samples))
             for axis, (sensor, units) in SUNSIDED.items()]
 
 
