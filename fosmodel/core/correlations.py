@@ -110,10 +110,10 @@ class LagCorrelations:
         shift = [float((offsets or {}).get(ch, 0.0)) for ch in plan.names]
         if self.n_samples > _BLOCKED_SAMPLES:
             self._offsets = shift
-            self._centred_block: tuple[int, int, dict[int, np.ndarray]] = (0, 0, {})
         else:
             self._signals = [u - m if m else u for u, m in zip(self._signals, shift)]
             self._offsets = [0.0] * len(shift)
+        self._centred_block: tuple[int, int, dict[int, np.ndarray]] = (0, 0, {})
         self._cand_ch, self._cand_lag, self._cand_lmin = plan.ch, plan.lag, plan.lmin
         self._squares: dict[int, np.ndarray] = {}
         self._table_keys = np.empty(0, dtype=np.int64)  # tabulated shape keys, sorted
@@ -192,8 +192,7 @@ class LagCorrelations:
 
     def _enter_block(self, lo: int, hi: int) -> None:
         """Make the block ``lo..hi-1`` (and the lag window before it) the one centred."""
-        if self.n_samples > _BLOCKED_SAMPLES:
-            self._centred_block = (max(lo - self._n0, 0), hi, {})
+        self._centred_block = (max(lo - self._n0, 0), hi, {})
 
     def _power(self, ch: int | None, rel: int, k: int, lo: int, hi: int) -> np.ndarray:
         """u_ch(t - rel)^k (k = 1 or 2) for t = lo..hi-1.
