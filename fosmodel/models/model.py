@@ -547,13 +547,11 @@ class FOSModel(BaseEstimator):
         one block's signals, not of the record's; every sample is computed as in one
         pass (the same products and sums), so the predictions are the same.
         """
-        y_arr = np.asarray(y, dtype=float)
-        columns = {k: np.asarray(v) for k, v in exog.items()} if exog is not None else None
+        head = _record_heads(y, exog)
         out = np.full(n, np.nan)
         for lo in range(start, n, _PREDICT_ROWS):
             hi = min(lo + _PREDICT_ROWS, n)
-            cut = {k: v[:hi] for k, v in columns.items()} if columns is not None else None
-            out[lo:hi] = self.predict(y_arr[:hi], cut, start=lo)[lo:]
+            out[lo:hi] = self.predict(*head(hi), start=lo)[lo:]
         return out
 
     def _blockable(self, exog: Exog | None, n: int) -> bool:
@@ -756,8 +754,7 @@ class FOSModel(BaseEstimator):
         copies of that many samples of the signals, not of the record's; each run is
         computed from the same samples as in one call.
         """
-        y_arr = np.asarray(y, dtype=float)
-        columns = {k: np.asarray(v) for k, v in exog.items()} if exog is not None else None
+        head = _record_heads(y, exog)
         order = np.argsort(starts, kind="stable")
         ordered = starts[order]
         out = np.empty((len(starts), n_steps))
@@ -765,9 +762,9 @@ class FOSModel(BaseEstimator):
         while first < len(order):
             reach = ordered[first] - self.lag_window_ + _PREDICT_ROWS - n_steps
             last = max(int(np.searchsorted(ordered, reach, side="right")), first + 1)
-            group, hi = order[first:last], int(ordered[last - 1]) + n_steps
-            cut = {k: v[:hi] for k, v in columns.items()} if columns is not None else None
-            out[group] = self.free_runs(y_arr[:hi], ordered[first:last], n_steps, cut)
+            y_head, exog_head = head(int(ordered[last - 1]) + n_steps)
+            out[order[first:last]] = self.free_runs(y_head, ordered[first:last], n_steps,
+                                                    exog_head)
             first = last
         return out
 
@@ -901,6 +898,24 @@ def _older_state(version: int, fitted: Mapping[str, object], n_terms: int) -> di
     """Return the fitted state a file of format ``version`` lacks, as it reads there."""
     return {name: default(n_terms) for added, names in _ADDED_IN.items() if version < added
             for name, default in names.items() if name not in fitted}
+
+
+def _record_heads(
+    y: ArrayLike, exog: Exog | None,
+) -> Callable[[int], tuple[np.ndarray, dict[str, np.ndarray] | None]]:
+    """Return a function giving the first ``hi`` samples of ``y`` and of each channel.
+
+    ``y`` and the channels (a DataFrame's columns too) become arrays once, not at every cut:
+    the long-record paths predict and free-run a record's head many times.
+    """
+    y_arr = np.asarray(y, dtype=float)
+    columns = {k: np.asarray(v) for k, v in exog.items()} if exog is not None else None
+
+    def head(hi: int) -> tuple[np.ndarray, dict[str, np.ndarray] | None]:
+        return y_arr[:hi], ({k: v[:hi] for k, v in columns.items()} if columns is not None
+                            else None)
+
+    return head
 
 
 def _as_input_type(prediction: np.ndarray, y: ArrayLike) -> np.ndarray | pd.Series:
