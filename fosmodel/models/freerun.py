@@ -265,7 +265,7 @@ def _recursion(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.nd
     :func:`_recursion_numpy`, the reference the compiled one is tested against.
     """
     index, coef = _factor_columns(ex, hist.shape[1], levels.shape[1])
-    ones = np.ones(drive.shape)
+    ones = np.ones(drive.shape) if any(r is None for r in rests) else None
     rest = np.stack([ones if r is None else r for r in rests], axis=1)  # (K, T, H)
     phi = ex.phi[::-1].copy()  # against the window y[n-p .. n-1]
     kernel = _compiled_recursion()
