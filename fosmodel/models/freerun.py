@@ -265,8 +265,10 @@ def _recursion(ex: Expansion, hist: np.ndarray, levels: np.ndarray, drive: np.nd
     :func:`_recursion_numpy`, the reference the compiled one is tested against.
     """
     index, coef = _factor_columns(ex, hist.shape[1], levels.shape[1])
-    ones = np.ones(drive.shape) if any(r is None for r in rests) else None
-    rest = np.stack([ones if r is None else r for r in rests], axis=1)  # (K, T, H)
+    rest = np.ones((drive.shape[0], len(rests), drive.shape[1]))  # (K, T, H): 1 without inputs
+    for t, factors in enumerate(rests):
+        if factors is not None:
+            rest[:, t] = factors
     phi = ex.phi[::-1].copy()  # against the window y[n-p .. n-1]
     kernel = _compiled_recursion()
     if kernel is None:
