@@ -61,21 +61,30 @@ def timed(plan: StudyPlan, client: object) -> tuple[float, float, object]:
     return wall, cpu_seconds(client) - cpu, result.rows.drop(columns="runtime_s")
 
 
-def _burn(n: int) -> float:
-    """CPU seconds of a pure-Python loop of ``n`` steps."""
-    start, total = time.process_time(), 0
+def _burn(barrier: object, results: object, n: int) -> None:
+    """Once both processes are up, run a pure-Python loop of ``n`` steps; put (CPU s, wall s)."""
+    barrier.wait()
+    start, cpu, total = time.perf_counter(), time.process_time(), 0
     for i in range(n):
         total += i * i
-    return time.process_time() - start
+    results.put((time.process_time() - cpu, time.perf_counter() - start))
 
 
 def cores_available(n: int = 10_000_000) -> float:
-    """The cores two busy processes get now: 2 on an idle 2-core machine, less if shared."""
-    with multiprocessing.get_context("spawn").Pool(2) as pool:
-        pool.map(_burn, [1, 1])
-        start = time.perf_counter()
-        cpu = sum(pool.map(_burn, [n, n]))
-        return cpu / (time.perf_counter() - start)
+    """The cores two busy processes get now: 2 on an idle 2-core machine, less if shared.
+
+    Both start their loops together, after a barrier: with a pool, the first worker up could
+    take both loops while the other was still importing, and a quiet machine read 1.0.
+    """
+    spawn = multiprocessing.get_context("spawn")
+    barrier, results = spawn.Barrier(2), spawn.Queue()
+    workers = [spawn.Process(target=_burn, args=(barrier, results, n)) for _ in range(2)]
+    for worker in workers:
+        worker.start()
+    measured = [results.get() for _ in workers]
+    for worker in workers:
+        worker.join()
+    return sum(cpu for cpu, _ in measured) / max(wall for _, wall in measured)
 
 
 def machine() -> str:
