@@ -24,6 +24,8 @@ import multiprocessing
 import os
 import platform
 import time
+from multiprocessing.queues import Queue
+from multiprocessing.synchronize import Barrier
 
 import dask
 import numpy as np
@@ -61,7 +63,7 @@ def timed(plan: StudyPlan, client: object) -> tuple[float, float, object]:
     return wall, cpu_seconds(client) - cpu, result.rows.drop(columns="runtime_s")
 
 
-def _burn(barrier: object, results: object, n: int) -> None:
+def _burn(barrier: Barrier, results: Queue, n: int) -> None:
     """Once both processes are up, run a pure-Python loop of ``n`` steps; put (CPU s, wall s)."""
     barrier.wait()
     start, cpu, total = time.perf_counter(), time.process_time(), 0
