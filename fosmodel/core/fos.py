@@ -413,10 +413,7 @@ def center(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     mean = a.mean(axis=0)
     out = a - mean
     if len(a):
-        cols, out_cols = a.reshape(len(a), -1), out.reshape(len(a), -1)  # views
-        maybe = np.flatnonzero(cols[0] == cols[-1])  # a column whose ends differ varies
-        if len(maybe):
-            out_cols[:, maybe[np.ptp(cols[:, maybe], axis=0) == 0]] = 0.0
+        out.reshape(len(a), -1)[:, _constant_columns(a.reshape(len(a), -1))] = 0.0  # a view
     return out, mean
 
 
@@ -428,9 +425,17 @@ def deferred_center(a: np.ndarray) -> tuple[np.ndarray, float, float]:
     constant (which :func:`center` makes exactly zero).
     """
     mean = float(a.mean())
-    if len(a) and a[0] == a[-1] and np.ptp(a) == 0:
+    if len(a) and _constant_columns(a[:, None])[0]:
         return np.zeros_like(a), mean, 0.0
     return a, mean, mean
+
+
+def _constant_columns(cols: np.ndarray) -> np.ndarray:
+    """Which columns of the 2-D, non-empty ``cols`` hold one value exactly (a boolean mask)."""
+    constant = cols[0] == cols[-1]  # a column whose ends differ varies: no need to scan it
+    maybe = np.flatnonzero(constant)
+    constant[maybe] = np.ptp(cols[:, maybe], axis=0) == 0
+    return constant
 
 
 def _as_finite(a: ArrayLike, name: str, ndim: int) -> np.ndarray:
