@@ -348,7 +348,7 @@ def band_ratio(res: LoopResult, rate: float, lo: float, hi: float) -> tuple[floa
     return float(s[band].mean() / np.median(s)), float(freqs[band][np.argmax(s[band])])
 
 
-def named_effects(loops: dict, recs, mtig_keep: Record, temp: pd.DataFrame) -> list[str]:
+def named_effects(loops: dict, recs, temp: pd.DataFrame) -> list[str]:
     """One sentence per effect of the issue's list, from this run's numbers."""
     lines = []
     ay = temp.set_index("Axis").loc["ay_g"]
@@ -384,8 +384,8 @@ def named_effects(loops: dict, recs, mtig_keep: Record, temp: pd.DataFrame) -> l
         f"(largest |gx| {np.max(np.abs(rec4.column('gx_dps'))):.2f} deg/s, first at sample "
         f"{spike[0] if len(spike) else 'none'}); the loop on gx keeps "
         f"{'; '.join(s.effect.describe() for s in gx4.steps) or 'nothing'}.")
-    keep, clip = loops[("MTi-G (outliers kept)", "gyro_x")], loops[("MTi-G (outliers clipped)",
-                                                                    "gyro_x")]
+    keep, clip = loops[(MTIG_KEEP, "gyro_x")], loops[(MTIG_CLIP, "gyro_x")]
+    mtig_keep = recs[MTIG_KEEP][0]
     lines.append(
         f"- **MTi-G outliers.** The loader flags {len(mtig_keep.outliers.get('gyro_x', []))} of "
         f"{mtig_keep.n_samples} samples (more than 10 MAD-sigmas from the median). With them "
@@ -466,8 +466,8 @@ def main() -> None:
     if allan_only:
         print(f"section real-allan of docs/pages/real-data.md rewritten; results in {OUT}")
         return
-    results = dict(zip((t[1] for t in studied), results_of(studied, done)))
-    loop_results = dict(zip((t[1] for t in looped), results_of(looped, done)))
+    results = {key: done[kind, key] for kind, key, *_ in studied}
+    loop_results = {key: done[kind, key] for kind, key, *_ in looped}
     studies = pd.DataFrame([study_row(*key, result) for key, result in results.items()])
     loops = pd.DataFrame([loop_row(*key, res) for key, res in loop_results.items()])
     temp = pd.DataFrame(results_of(temperature, done))
@@ -489,7 +489,7 @@ def main() -> None:
         *loop_lines(loops), "",
         markdown_table(loops, digits=3), "",
         "**The effects the issue points to**, checked:", "",
-        *named_effects(loop_results, recs, recs[MTIG_KEEP][0], temp), "",
+        *named_effects(loop_results, recs, temp), "",
         "MPU-6050 (sunsided) with its die temperature added, prediction segment:", "",
         markdown_table(temp, digits=3)]))
     print(f"section real-data of docs/pages/real-data.md rewritten; results in {OUT}")
