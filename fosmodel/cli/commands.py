@@ -230,6 +230,9 @@ def allan(args: argparse.Namespace) -> int:
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     if args.columns:
         return _allan_axes(args, out, json_path)
+    if args.inflate != 1.0:
+        raise InputError("--inflate scales the exports of --columns (Kalibr, OpenVINS, VINS, "
+                         "ORB-SLAM3, PX4, ArduPilot); one --column has none")
     from ..noise.allan import allan_deviation, fit_noise, write_allan
 
     rec = _load(args, columns=[args.column])
@@ -266,7 +269,7 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
     noise = imu_noise({a.column: rec.column(a.column) for a in axes}, axes, rec.require_rate(),
                       rec.source, min_tau=args.min_tau)
     with report_directory(out, [args.file]) as tmp:
-        write_imu_noise(noise, tmp, args.title or Path(args.file).name)
+        write_imu_noise(noise, tmp, args.title or Path(args.file).name, inflate=args.inflate)
     print(noise.summary())
     for a in noise.axes:
         if a.fit.misses():
@@ -274,7 +277,7 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
                   "deviation beyond its 95 % interval; see its figure's lower panel",
                   file=sys.stderr)
     if json_path:
-        write_text(json_path, json.dumps(noise.to_dict(), indent=1) + "\n")
+        write_text(json_path, json.dumps(noise.to_dict(args.inflate), indent=1) + "\n")
     print(f"Allan noise report of {len(axes)} axes written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else ""))
     return 0

@@ -23,10 +23,12 @@ from ..io.split import SplitSpec
 from ..noise.axes import UnitsSpec
 from ..study.harness import METHODS
 from .arguments import (
+    INFLATE_HELP,
     RECORD_HELP,
     SPLIT_HELP,
     UNITS_HELP,
     add_loader_options,
+    inflation,
     int_list,
     name_list,
     positive_float,
@@ -77,13 +79,14 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--min-tau", type=positive_float,
                         help="shortest averaging time of the Allan fits, in s (default: found "
                              "per axis)")
+    parser.add_argument("--inflate", type=inflation, default="1", metavar="K", help=INFLATE_HELP)
 
 
 def workflow_settings(args: argparse.Namespace) -> dict[str, Any]:
     """Return the settings of :class:`~fosmodel.workflows.imu.ImuConfig` the options give."""
     return dict(orders=args.orders, degrees=args.degrees, methods=args.methods,
                 protocols=("paper", "fair") if args.protocol == "both" else (args.protocol,),
-                horizon_s=args.horizon, min_tau=args.min_tau)
+                horizon_s=args.horizon, min_tau=args.min_tau, inflate=args.inflate)
 
 
 def imu(args: argparse.Namespace) -> int:

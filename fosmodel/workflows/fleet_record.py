@@ -219,5 +219,5 @@ def _reports(outcome: _Outcome, out_dir: Path, name: str) -> None:
         write_imu_report(result, out_dir, name)
         return
     for write, args in report_parts(out_dir, name, axes, outcome.noise, outcome.study,
-                                    outcome.loop):
+                                    outcome.loop, outcome.imu.inflate):
         write(*args)

@@ -57,6 +57,9 @@ class ImuConfig:
         L of the loop's starting model.
     min_tau : float, optional
         Shortest averaging time of the Allan fits (default: found per axis).
+    inflate : float
+        Factor on every exported noise value, for a moving platform
+        (:mod:`fosmodel.noise.exports`; 1: the static record's values).
     n_jobs : int
         Study and loop tasks run at once (1: in this process).
     """
@@ -72,6 +75,7 @@ class ImuConfig:
     loop_split: tuple[float, float] = (0.5, 0.2)
     loop_max_lag: int = 10
     min_tau: float | None = None
+    inflate: float = 1.0
     n_jobs: int = 2
 
     def study_config(self, rate: float, axis: Axis) -> StudyConfig:
@@ -168,7 +172,7 @@ class ImuResult:
     def to_dict(self) -> dict[str, Any]:
         """Every table of the report as records, and the noise parameters."""
         return {"source": self.source, "rate_hz": self.rate, "n_samples": self.n_samples,
-                "aux": self.aux, "noise": self.noise.to_dict(),
+                "aux": self.aux, "noise": self.noise.to_dict(self.config.inflate),
                 "study": _records(self.study_table()), "loop": _records(self.loop_table()),
                 "loops": {a.axis.column: a.loop.to_json_dict() for a in self.axes}}
 

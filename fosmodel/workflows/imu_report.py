@@ -7,8 +7,9 @@ Layout of the report directory::
 
     report.md            the page: noise, study and loop tables (a row per axis), run times
     noise.* study.* loop.* timing.*   each table as Markdown, CSV and LaTeX
-    noise/               the Allan report of all axes: imu.yaml (Kalibr), imu_params.m
-                         (MATLAB), imu_noise.json, the figures, each axis under noise/axes/
+    noise/               the Allan report of all axes: imu.yaml (Kalibr), the OpenVINS,
+                         VINS, ORB-SLAM3, PX4 and ArduPilot files, imu_params.m (MATLAB),
+                         imu_noise.json, the figures, each axis under noise/axes/
     study/AXIS/          each axis's model-order study
     loop/AXIS/           each axis's residual loop
     models/AXIS.json     each axis's FOS error model (``fosmodel predict`` reads it)
@@ -94,22 +95,23 @@ def _parts(result: ImuResult, out_dir: Path, title: str) -> list[tuple[Callable,
     """
     return report_parts(out_dir, title, [a.axis for a in result.axes], result.noise,
                         {a.axis.column: a.study for a in result.axes},
-                        {a.axis.column: a.loop for a in result.axes})
+                        {a.axis.column: a.loop for a in result.axes}, result.config.inflate)
 
 
 def report_parts(
     out_dir: Path, title: str, axes: Sequence[Axis], noise: ImuNoise | None = None,
     studies: Mapping[str, StudyResult] | None = None,
-    loops: Mapping[str, LoopResult] | None = None,
+    loops: Mapping[str, LoopResult] | None = None, inflate: float = 1.0,
 ) -> list[tuple[Callable, tuple]]:
     """List the reports of the steps given, each a writer and its arguments.
 
-    The noise of every axis in ``noise/``, and each axis's study and loop in
-    ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of the steps it ran).
+    The noise of every axis in ``noise/`` (its exports times ``inflate``), and each axis's
+    study and loop in ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of
+    the steps it ran).
     """
     parts: list[tuple[Callable, tuple]] = []
     if noise is not None:
-        parts.append((write_imu_noise, (noise, _mkdir(out_dir / "noise"), title)))
+        parts.append((write_imu_noise, (noise, _mkdir(out_dir / "noise"), title, inflate)))
     for a in axes:
         if studies:
             parts.append((write_study, (studies[a.column], out_dir / "study" / a.column,
@@ -155,8 +157,13 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
     sections = [
         ("Noise parameters (Allan variance)", "noise",
          "IEEE Std 952 terms fitted to each axis's overlapping Allan deviation; exports for "
-         "Kalibr (`noise/imu.yaml`), MATLAB (`noise/imu_params.m`) and JSON "
-         "(`noise/imu_noise.json`); figures `noise/allan_gyro.png`, `noise/allan_accel.png`."),
+         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/openvins_kalibr_imu_chain.yaml`), "
+         "VINS-Mono/Fusion (`noise/vins_imu.yaml`), ORB-SLAM3 (`noise/orbslam3_imu.yaml`), "
+         "PX4 EKF2 (`noise/px4_ekf2.params`), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
+         "MATLAB (`noise/imu_params.m`) and JSON (`noise/imu_noise.json`)"
+         + (f", inflated {result.config.inflate:g}x for a moving platform" if
+            result.config.inflate != 1.0 else "")
+         + "; figures `noise/allan_gyro.png`, `noise/allan_accel.png`."),
         ("Model-order study", "study",
          "Each method fitted on the first segment, its order chosen on the second, scored on "
          "the rest (fair protocol: every method on the same raw data). Each axis's full "
