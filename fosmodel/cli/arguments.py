@@ -136,5 +136,7 @@ def inflation(text: str) -> float:
 
 
 INFLATE_HELP = ("multiply every exported noise value (Kalibr, OpenVINS, VINS, ORB-SLAM3, PX4, "
-                "ArduPilot, MATLAB) by K for a moving platform, and say so in each file "
-                "(default: 1, the static record's values)")
+                "ArduPilot, MATLAB) by K for a moving platform, and say so in each file; 1 "
+                "keeps the static record's values")
+STATIC_ONLY_HELP = ("analyse the longest static stretch of a record that moves (by default a "
+                    "record that moves is refused: an Allan analysis needs the sensor at rest)")

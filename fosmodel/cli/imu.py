@@ -26,6 +26,7 @@ from .arguments import (
     INFLATE_HELP,
     RECORD_HELP,
     SPLIT_HELP,
+    STATIC_ONLY_HELP,
     UNITS_HELP,
     add_loader_options,
     inflation,
@@ -34,7 +35,7 @@ from .arguments import (
     positive_float,
     positive_int,
 )
-from .commands import _load
+from .commands import _checked, _load
 from .parsing import parsed
 
 
@@ -79,6 +80,7 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--min-tau", type=positive_float,
                         help="shortest averaging time of the Allan fits, in s (default: found "
                              "per axis)")
+    parser.add_argument("--static-only", action="store_true", help=STATIC_ONLY_HELP)
     parser.add_argument("--inflate", type=inflation, default="1", metavar="K", help=INFLATE_HELP)
 
 
@@ -97,10 +99,17 @@ def imu(args: argparse.Namespace) -> int:
     json_path = writable_file(args.json) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
-    rec = _load(args)  # every column: an IMU record has few, and its temperature is found
+    from ..noise.checks import unused_columns
+
+    rec = _load(args, notes=False)  # every column: an IMU record has few; its temperature too
     axes, aux = record_axes(rec, args.columns, args.units, args.temperature)
+    rec = _checked(args, rec, axes)
+    aux = {name: rec.column(name) for name in aux}  # the static stretch's, if one was kept
     for axis in axes:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
+    for column, why in unused_columns(rec.names, [*(a.column for a in axes), *aux],
+                                      named=bool(args.columns)):
+        print(f"fosmodel: note: column {column!r} skipped: {why}", file=sys.stderr)
     rate = rec.require_rate()
     train_s, evaluate_s = args.split.seconds(rec.n_samples, rate)
     config = ImuConfig(**workflow_settings(args), train_s=train_s, evaluate_s=evaluate_s,
