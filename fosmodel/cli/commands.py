@@ -279,6 +279,7 @@ def allan(args: argparse.Namespace) -> int:
 
 
 def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> int:
+    from ..filter.joint_noise import joint_noise
     from ..noise.imu_noise import imu_noise, write_imu_noise
 
     rec = _load(args, columns=[spec.partition(":")[0] for spec in args.columns], notes=False)
@@ -286,10 +287,13 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
     rec = _checked(args, rec, axes)
     for axis in axes:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
-    noise = imu_noise({a.column: rec.column(a.column) for a in axes}, axes, rec.require_rate(),
-                      rec.source, min_tau=args.min_tau)
+    columns = {a.column: rec.column(a.column) for a in axes}
+    noise = imu_noise(columns, axes, rec.require_rate(), rec.source, min_tau=args.min_tau)
+    joint = joint_noise(columns, noise) if len(axes) > 1 else None
     with report_directory(out, [args.file]) as tmp:
         write_imu_noise(noise, tmp, args.title or Path(args.file).name, inflate=args.inflate)
+        if joint is not None:
+            write_text(tmp / "joint_model.json", json.dumps(joint.to_dict(), indent=1) + "\n")
     print(noise.summary())
     for a in noise.axes:
         if a.fit.misses():

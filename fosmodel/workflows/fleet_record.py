@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from ..filter.joint_noise import joint_noise
 from ..io.loader import load_record
 from ..io.output import report_directory
 from ..io.record import Record
@@ -228,7 +229,9 @@ def _reports(outcome: _Outcome, out_dir: Path, name: str) -> None:
                                                       outcome.loop[a.column],
                                                       outcome.axis_seconds[a.column])
                                            for a in axes],
-                           sorted(outcome.aux), outcome.seconds["allan"])
+                           sorted(outcome.aux), outcome.seconds["allan"],
+                           joint_noise({a.column: rec.column(a.column) for a in axes},
+                                       outcome.noise) if len(axes) > 1 else None)
         write_imu_report(result, out_dir, name)
         return
     for write, args in report_parts(out_dir, name, axes, outcome.noise, outcome.study,

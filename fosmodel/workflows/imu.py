@@ -24,6 +24,7 @@ import pandas as pd
 
 from ..core.exceptions import InputError
 from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_covariance
+from ..filter.joint_noise import JointNoise, joint_noise
 from ..filter.statespace import StateSpace
 from ..io.record import Record
 from ..loop.closeloop import LoopConfig, LoopResult, close_loop, loop_split
@@ -133,6 +134,7 @@ class ImuResult:
     axes: list[AxisResult]
     aux: list[str]
     allan_seconds: float
+    joint: JointNoise | None = None
 
     def study_table(self) -> pd.DataFrame:
         """Tabulate per axis the best FOS and the best baseline of the study.
@@ -251,6 +253,7 @@ def run_imu(
     config.check(n, rate, axes)
     start = time.perf_counter()
     noise = imu_noise(columns, axes, rate, source, min_tau=config.min_tau)
+    joint = joint_noise(columns, noise) if len(axes) > 1 else None
     allan_s = time.perf_counter() - start
     say(f"allan: {len(axes)} axes in {allan_s:.1f} s")
     channels = {**{a.column: columns[a.column] for a in axes}, **(aux or {})}
@@ -262,7 +265,8 @@ def run_imu(
     results = [AxisResult(a, done[a.column, "study"][0], done[a.column, "loop"][0],
                           {"study": done[a.column, "study"][1],
                            "loop": done[a.column, "loop"][1]}) for a in axes]
-    return ImuResult(source, float(rate), n, config, noise, results, sorted(aux or {}), allan_s)
+    return ImuResult(source, float(rate), n, config, noise, results, sorted(aux or {}), allan_s,
+                     joint)
 
 
 def _check(columns: Mapping[str, np.ndarray], axes: Sequence[Axis],

@@ -14,6 +14,7 @@ Layout of the report directory::
     loop/AXIS/           each axis's residual loop
     models/AXIS.json     each axis's FOS error model (``fosmodel predict`` reads it)
     filter/allan_model.json   the axes' Allan error models as one state-space shaping filter
+    filter/joint_model.json   the same with the axes' correlations in its driving noise
 """
 
 from __future__ import annotations
@@ -60,9 +61,14 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
     models = [_write_model(result, a, _mkdir(out_dir / "models")) for a in result.axes]
     filter_path = _mkdir(out_dir / "filter") / "allan_model.json"
     write_text(filter_path, json.dumps(result.filter_dict(), indent=1) + "\n")
+    if result.joint is not None:
+        write_text(out_dir / "filter" / "joint_model.json",
+                   json.dumps({"source": result.source, **result.joint.to_dict()}, indent=1)
+                   + "\n")
     report = out_dir / "report.md"
     write_text(report, _page(result, title, tables, models))
-    return [*paths, *(p for p, _ in models), filter_path, report]
+    joint = [out_dir / "filter" / "joint_model.json"] if result.joint is not None else []
+    return [*paths, *(p for p, _ in models), filter_path, *joint, report]
 
 
 def write_imu_tables(result: ImuResult, out_dir: Path,
@@ -184,6 +190,10 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
               "first-order Gauss-Markov bias instability, a random-walk bias) as one "
               "block-diagonal shaping filter at the record's rate: Phi, G, Q, H and the "
               "initial covariance P0 (see the docs' Kalman page)."]
+    if result.joint is not None:
+        lines.append("- `filter/joint_model.json`: the same states with the axes' correlations "
+                     "in the driving noise (white parts from the first differences, biases from "
+                     "the cross Allan covariance), and the correlation matrices.")
     lines += [f"- `models/{p.name}`: {which} (FOS; `fosmodel predict` reads it)."
               for p, which in models]
     frame, caption = tables["timing"]
