@@ -266,7 +266,7 @@ def _columns_truth(sources, order, target, col_units) -> dict[str, dict[str, Any
         "time": {"units": "s", "role": "time", "note": "n/rate_hz; written first when requested"}
     }
     for c in order:
-        users = [s for s in sources if c in s.requires and target in s.outputs(target)]
+        users = [s for s in sources if c in s.requires]
         role = "target" if c == target else ("input" if users else "auxiliary")
         info[c] = {
             "units": col_units[c],
