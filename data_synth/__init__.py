@@ -40,7 +40,7 @@ from data_synth.effects import (
     TurnOnBias,
     Vibration,
 )
-from data_synth.io import truth_path, write_record
+from data_synth.io import session_paths, truth_path, write_record, write_sessions
 from data_synth.orientation import Orientation
 from data_synth.profiles import RoomCycle, StepProfile, Sweep, WarmUp
 from data_synth.record import SynthRecord, compose
@@ -88,6 +88,8 @@ __all__ = [
     "list_scenarios",
     "make_scenario",
     "make_sessions",
+    "session_paths",
     "truth_path",
     "write_record",
+    "write_sessions",
 ]
