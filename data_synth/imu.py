@@ -34,17 +34,18 @@ from data_synth.effects import ConstantBias, Quantizer, TemperatureBias, TurnOnB
 from data_synth.orientation import Orientation
 from data_synth.profiles import Sweep
 from data_synth.sources import BiasInstability, GaussMarkov, RandomWalk, WhiteNoise
-from data_synth.units import ACCEL_UNIT, arw_to_density, vrw_to_density
+from data_synth.units import ACCEL_UNIT, arw_to_density, mg_to_mps2, vrw_to_density
 
 GYROS = ("gx_dps", "gy_dps", "gz_dps")
 ACCELS = ("ax_mps2", "ay_mps2", "az_mps2")
 UNITS = {**{c: "deg/s" for c in GYROS}, **{c: ACCEL_UNIT for c in ACCELS}}
 
-#: Per sensor at 1 Hz: ARW deg/sqrt(h) or VRW m/s/sqrt(h), bias instability B and rate random
-#: walk K (deg/s and deg/s/sqrt(s), or m/s^2 and m/s^2/sqrt(s)), turn-on bias sigma.
+#: Per sensor at 1 Hz: white noise as ARW deg/sqrt(h) or VRW m/s/sqrt(h), bias instability B
+#: and rate random walk K (deg/s and deg/s/sqrt(s), or m/s^2 and m/s^2/sqrt(s)), turn-on bias
+#: sigma (deg/s, m/s^2).
 SWEEP_NOISE = {
-    "gyro": {"random_walk_h": 0.5, "bias_instability": 0.001, "rrw": 3e-6, "turn_on": 0.1},
-    "accel": {"random_walk_h": 0.06, "bias_instability": 3e-4, "rrw": 2e-6, "turn_on": 0.02},
+    "gyro": {"white": 0.5, "bias_instability": 0.001, "rrw": 3e-6, "turn_on": 0.1},
+    "accel": {"white": 0.06, "bias_instability": 3e-4, "rrw": 2e-6, "turn_on": 0.02},
 }
 #: Correlation times of the bias instability's Gauss-Markov terms at 1 Hz.
 SWEEP_BI_BAND_S = (10.0, 10_000.0)
@@ -69,10 +70,15 @@ SESSION_SWEEPS = (
 #: Each session another axis up: gravity on z, then x, then -y.
 SESSION_ORIENTATIONS = ("+z/+x", "+x/+y", "-y/+z")
 
-#: ADIS16405-like per-axis levels at 100 Hz (as the static_imu scenario).
-COMPANION_ARW = {"gx_dps": 2.0, "gy_dps": 2.2, "gz_dps": 1.9}
-COMPANION_VRW = {"ax_mps2": 0.20, "ay_mps2": 0.22, "az_mps2": 0.25}
-COMPANION_SLOW = {"gyro": (0.007 / 0.664, 7e-4), "accel": (0.2e-3 * 9.80665 / 0.664, 4.2e-4)}
+#: Per axis: gyro ARW (deg/sqrt(h)) and accelerometer VRW (m/s/sqrt(h)) around the ADIS16405
+#: datasheet's 2 and 0.2, a little apart so that the axes differ (design choice).
+IMU_GYRO_ARW = {"gx_dps": 2.0, "gy_dps": 2.2, "gz_dps": 1.9}
+IMU_ACCEL_VRW = {"ax_mps2": 0.20, "ay_mps2": 0.22, "az_mps2": 0.25}
+#: Bias instability B: the datasheet's in-run stability (0.007 deg/s, 0.2 mg) is the Allan
+#: floor, 0.664 B.  Rate random walk K: about what the ADIS16405 sessions show (150 deg/h/sqrt(h)
+#: = 7e-4 deg/s/sqrt(s); 90 m/s/h/sqrt(h) = 4.2e-4 m/s^2/sqrt(s)).
+IMU_GYRO_B, IMU_GYRO_K = 0.007 / 0.664, 7e-4
+IMU_ACCEL_B, IMU_ACCEL_K = mg_to_mps2(0.2) / 0.664, 4.2e-4
 #: Shared parts: equal-time correlations of the gyros' and of the accelerometers' noise.
 GYRO_CORR = ((1.0, 0.3, -0.15), (0.3, 1.0, 0.2), (-0.15, 0.2, 1.0))
 ACCEL_CORR = ((1.0, 0.25, 0.1), (0.25, 1.0, -0.2), (0.1, -0.2, 1.0))
@@ -175,7 +181,7 @@ def _axis_sources(column: str, at_rest: float) -> list[Source]:
     and rate random walk of one axis of a sweep record."""
     sensor = "gyro" if column in GYROS else "accel"
     noise = SWEEP_NOISE[sensor]
-    density = (arw_to_density if sensor == "gyro" else vrw_to_density)(noise["random_walk_h"])
+    density = (arw_to_density if sensor == "gyro" else vrw_to_density)(noise["white"])
     return [
         TurnOnBias(noise["turn_on"], channel=column, name=f"{column}_turn_on"),
         ConstantBias(at_rest, channel=column, name=_at_rest_name(column)),
@@ -207,8 +213,8 @@ def companion_spec(
     """
     attitude = Orientation.parse(orientation)
     sources: list[Source] = []
-    groups = (("gyro", GYROS, gyro_corr, COMPANION_ARW, arw_to_density),
-              ("accel", ACCELS, accel_corr, COMPANION_VRW, vrw_to_density))
+    groups = (("gyro", GYROS, gyro_corr, IMU_GYRO_ARW, arw_to_density),
+              ("accel", ACCELS, accel_corr, IMU_ACCEL_VRW, vrw_to_density))
     for sensor, axes, corr, levels, to_density in groups:
         sources.append(CorrelatedWhiteNoise(axes, tuple(to_density(levels[c]) for c in axes),
                                             corr, name=f"{sensor}_white"))
@@ -216,7 +222,7 @@ def companion_spec(
             sources.append(CorrelatedGaussMarkov(axes, (FAST_SIGMA[sensor],), FAST_TAU_S, corr,
                                                  name=f"{sensor}_fast"))
     for column, at_rest in _at_rest(attitude).items():
-        b, k = COMPANION_SLOW["gyro" if column in GYROS else "accel"]
+        b, k = (IMU_GYRO_B, IMU_GYRO_K) if column in GYROS else (IMU_ACCEL_B, IMU_ACCEL_K)
         sources += [
             ConstantBias(at_rest, channel=column, name=_at_rest_name(column)),
             BiasInstability(b, 0.1, 3000.0, channel=column, name=f"{column}_bias_instability"),

@@ -50,6 +50,12 @@ from data_synth.imu import (
     DAY_SWEEP,
     GYRO_CORR,
     GYRO_LSB,
+    IMU_ACCEL_B,
+    IMU_ACCEL_K,
+    IMU_ACCEL_VRW,
+    IMU_GYRO_ARW,
+    IMU_GYRO_B,
+    IMU_GYRO_K,
     LAG_S,
     SESSION_ORIENTATIONS,
     SESSION_SWEEPS,
@@ -358,15 +364,7 @@ def _gyro_array_8(units="deg/s", rho_arw=0.0, rho_rrw=0.0, typical=False):
 
 # --- a static six-axis IMU ------------------------------------------------------------------
 
-#: Per axis: gyro ARW (deg/sqrt(h)) and accelerometer VRW (m/s/sqrt(h)) around the ADIS16405
-#: datasheet's 2 and 0.2, a little apart so that the axes differ (design choice).
-IMU_GYRO_ARW = {"gx_dps": 2.0, "gy_dps": 2.2, "gz_dps": 1.9}
-IMU_ACCEL_VRW = {"ax_mps2": 0.20, "ay_mps2": 0.22, "az_mps2": 0.25}
-#: Bias instability B: the datasheet's in-run stability (0.007 deg/s, 0.2 mg) is the Allan
-#: floor, 0.664 B.  Rate random walk K: about what the ADIS16405 sessions show (150 deg/h/sqrt(h)
-#: = 7e-4 deg/s/sqrt(s); 90 m/s/h/sqrt(h) = 4.2e-4 m/s^2/sqrt(s)).
-IMU_GYRO_B, IMU_GYRO_K = 0.007 / 0.664, 7e-4
-IMU_ACCEL_B, IMU_ACCEL_K = mg_to_mps2(0.2) / 0.664, 4.2e-4
+# The ADIS16405-like levels (IMU_GYRO_ARW...) are in data_synth.imu, shared with companion_noise.
 
 
 @_register(
