@@ -39,11 +39,11 @@ from fosmodel.loop.closeloop import LoopConfig, LoopResult, close_loop, score_fa
 from fosmodel.loop.diagnose import least_squares_spectrum
 from fosmodel.loop.effects import CandidateFamily, Effect
 from fosmodel.loop.loop_report import evaluation_text, write_loop_report
-from fosmodel.models.summary import markdown_table
 from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
 from fosmodel.study.harness import StudyConfig, StudyResult
 from fosmodel.study.report import paper_table, write_study
 from fosmodel.study.runner import run_study
+from fosmodel.typeset.markdown import markdown_table
 from fosmodel.workflows.imu import in_workers
 
 REPO = Path(__file__).resolve().parents[1]

@@ -54,8 +54,8 @@ from ..core.blas import one_blas_thread
 from ..core.exceptions import InputError
 from ..core.validation import as_signal, check_positive, did_you_mean
 from ..io.output import save_figure, write_tables
-from ..models.latex import mathtext_units
-from ..models.summary import Summary
+from ..typeset.latex import mathtext_units
+from ..typeset.summary import Summary
 from .metrics import STANDARD_GRAVITY, to_si_scale
 
 #: The IEEE Std 952 noise terms, from short to long averaging times.

@@ -59,8 +59,8 @@ from matplotlib.figure import Figure
 from .._version import __version__
 from ..core.exceptions import InputError
 from ..io.output import save_figure, write_tables, write_text
-from ..models.latex import mathtext_units
-from ..models.summary import Summary
+from ..typeset.latex import mathtext_units
+from ..typeset.summary import Summary
 from .allan import AllanResult, NoiseFit, allan_deviation, fit_noise, write_allan
 from .axes import SENSORS, Axis
 from .metrics import to_si_scale
