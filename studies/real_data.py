@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 from doc_pages import README, replace_section, show_figure
 
+from fosmodel.core.parallel import in_workers
 from fosmodel.io.loader import Record, load_record
 from fosmodel.io.samples import load_mpu6050_static
 from fosmodel.loop.closeloop import LoopConfig, LoopResult, close_loop, score_family
@@ -44,7 +45,6 @@ from fosmodel.study.harness import StudyConfig, StudyResult
 from fosmodel.study.report import paper_table, write_study
 from fosmodel.study.runner import run_study
 from fosmodel.typeset.markdown import markdown_table
-from fosmodel.workflows.imu import in_workers
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
