@@ -24,7 +24,9 @@ from fosmodel.io.output import write_tables
 from fosmodel.loop.closeloop import LoopConfig, close_loop
 from fosmodel.loop.loop_report import write_loop_report
 from fosmodel.models.model import FOSModel
-from fosmodel.noise.allan import allan_deviation, fit_noise, write_allan
+from fosmodel.noise.allan import allan_deviation
+from fosmodel.noise.allan_fit import fit_noise
+from fosmodel.noise.allan_report import write_allan
 from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
 from fosmodel.study.files import ColumnStudy, write_reports
 from fosmodel.study.harness import StudyConfig, plan_study
