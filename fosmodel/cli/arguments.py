@@ -10,7 +10,7 @@ import argparse
 
 import numpy as np
 
-from ..io.loader import OUTLIER_K, OUTLIER_MODES
+from ..io.outliers import OUTLIER_K, OUTLIER_MODES
 from .parsing import Refused
 
 #: What a record argument may be.
