@@ -47,8 +47,8 @@ import pandas as pd
 
 from ..core.exceptions import InputError
 from ..core.validation import did_you_mean
-from . import csv_reader, npy_reader, parquet_reader
 from .csv_reader import Preamble, preamble_rate
+from .formats import table_format
 from .outliers import OUTLIER_MODES, find_outliers, handle_outliers
 from .record import Record
 from .sensor_log import SensorLog
@@ -65,7 +65,6 @@ from .values import (
 
 #: Rows per block read from a file: a long record is converted block by block.
 CHUNK_ROWS = 500_000
-_READERS = {"csv": csv_reader, "npy": npy_reader, "parquet": parquet_reader}
 
 
 def load_record(
@@ -236,7 +235,7 @@ def _sensor_log(path: Path, topic: str | None, temperature_topic: str | None) ->
 def _header(path: Path) -> tuple[list[str], int, Preamble]:
     """Column names, the file line of the first data row (0 if rows, not lines), the preamble."""
     _check_regular(path)
-    return _READERS[_kind(path)].read_header(path)
+    return table_format(path).read_header(path)
 
 
 def _check_regular(path: Path) -> None:
@@ -260,11 +259,6 @@ def _check_regular(path: Path) -> None:
         raise InputError(f"{path}: the file is empty")
 
 
-def _kind(path: Path) -> str:
-    suffix = "".join(path.suffixes[-2:]).lower()
-    return next((k for k in ("npy", "parquet") if suffix.endswith("." + k)), "csv")
-
-
 def _kept(names: list[str], columns: Sequence[str] | None, scale: Mapping[str, float],
           src: str) -> list[str] | None:
     """Return the columns to read (None: all): those asked for, the time and the scaled ones."""
@@ -286,4 +280,4 @@ def _kept(names: list[str], columns: Sequence[str] | None, scale: Mapping[str, f
 def _blocks(path: Path, skip: int, names: list[str],
             keep: list[str] | None) -> tuple[Iterator[Block], int | None]:
     """Yield the kept columns, ``CHUNK_ROWS`` rows at a time; and the row count if known."""
-    return _READERS[_kind(path)].read_blocks(path, skip, names, keep, CHUNK_ROWS)
+    return table_format(path).read_blocks(path, skip, names, keep, CHUNK_ROWS)
