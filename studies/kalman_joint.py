@@ -48,10 +48,10 @@ from fosmodel.filter.statespace import StateSpace
 from fosmodel.io.loader import Record, load_record
 from fosmodel.io.output import write_tables
 from fosmodel.io.samples import load_mpu6050_static
-from fosmodel.models.summary import markdown_table
 from fosmodel.noise.axes import Axis
 from fosmodel.noise.imu_noise import imu_noise
 from fosmodel.noise.metrics import to_si_scale
+from fosmodel.typeset.markdown import markdown_table
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

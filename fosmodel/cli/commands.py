@@ -251,7 +251,9 @@ def allan(args: argparse.Namespace) -> int:
     if args.inflate != 1.0:
         raise InputError("--inflate scales the exports of --columns (Kalibr, OpenVINS, VINS, "
                          "ORB-SLAM3, PX4, ArduPilot); one --column has none")
-    from ..noise.allan import allan_deviation, fit_noise, write_allan
+    from ..noise.allan import allan_deviation
+    from ..noise.allan_fit import fit_noise
+    from ..noise.allan_report import write_allan
 
     rec = _load(args, columns=[args.column], notes=False)
     axis = _axes(args, [args.column], rec, optional=True)

@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from ..core.exceptions import InputError
-from ..noise.allan import NoiseFit
+from ..noise.allan_fit import NoiseFit
 from ..noise.imu_noise import ImuNoise
 from .allan_statespace import allan_state_space, assemble_axes, initial_covariance
 from .statespace import StateSpace
