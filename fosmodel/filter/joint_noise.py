@@ -48,12 +48,13 @@ from .statespace import StateSpace
 
 #: Which states of an axis's model share a correlation across axes: white with white, the
 #: biases (Gauss-Markov, random walk) with the same kind.
-_KIND = {"white": "white", "gauss-markov bias": "bias", "random-walk bias": "bias"}
+_KIND = {"white": "white", "gauss-markov bias": "bias", "bounded bias": "bias",
+         "random-walk bias": "bias"}
 #: A tau's Allan variance is the biases' where they make this share of it on both axes...
 BIAS_SHARE = 0.5
 #: ...and the terms that are neither white nor a bias (the ramp, a spectral line) at most this.
 OTHER_SHARE = 0.1
-BIAS_TERMS = ("B", "K")
+BIAS_TERMS = ("B", "K", "G")
 OTHER_TERMS = ("R", "S")
 
 

@@ -65,7 +65,7 @@ from ..core.exceptions import InputError
 from ..io.output import save_figure, write_tables, write_text
 from ..typeset.latex import mathtext_units
 from ..typeset.summary import Summary
-from .allan import AllanResult, allan_deviation
+from .allan import FLICKER_FLOOR, AllanResult, allan_deviation
 from .allan_fit import NoiseFit, fit_noise
 from .allan_report import write_allan
 from .axes import SENSORS, Axis
@@ -208,7 +208,10 @@ class ImuNoise:
             axes.append({"column": a.axis.column, "sensor": a.axis.sensor,
                          "units": a.axis.units, "told": a.axis.told,
                          "noise_density": terms["N"], "bias_instability": terms["B"],
-                         "random_walk": terms["K"], "fit": a.fit.to_dict()})
+                         "random_walk": terms["K"],
+                         "allan": {"taus_s": a.result.taus.tolist(),
+                                   "adev": a.result.adev.tolist()},
+                         "fit": a.fit.to_dict()})
         out = {"source": self.source, "rate_hz": self.rate, "tool": f"fosmodel {__version__}",
                "axes": axes, "one_number": self._one_number()}
         if all(self.of(s) for s in SENSORS):
@@ -246,16 +249,23 @@ class ImuNoise:
                  (f"% Inflated {inflate:g}x for a moving platform (--inflate): every value is "
                   f"{inflate:g} times the static record's." if inflate != 1.0 else
                   "% Not inflated (--inflate 1): the static record's values."),
-                 "% NoiseDensity = N, BiasInstability = B (Allan floor 0.664 B), RandomWalk = K; "
-                 "one value per axis in the order given,",
-                 "% or the largest over the axes when a sensor has not exactly three. Upper "
-                 "limits (terms not resolved) are marked."]
+                 "% NoiseDensity = N, BiasInstability = B (the IEEE Std 952 flicker coefficient, "
+                 "Allan floor 0.664 B), RandomWalk = K;",
+                 "% one value per axis in the order given, or the largest over the axes when a "
+                 "sensor has not exactly three. Upper limits (terms not resolved) are marked.",
+                 "% A bounded bias (Gauss-Markov) has no imuSensor parameter; the datasheet "
+                 "convention's bias instability, the fitted curve's minimum / 0.664, is given "
+                 "beside each sensor."]
         made = []
         for sensor, maker in (("gyro", "gyroparams"), ("accel", "accelparams")):
             axes = self.of(sensor)
             if not axes:
                 continue
             lines.append(f"% {sensor}: {', '.join(a.axis.column for a in axes)}")
+            sheet = [inflate * a.fit.bias_stability()[0] / FLICKER_FLOOR
+                     * to_si_scale(sensor, a.axis.units) for a in axes]
+            lines.append("%   datasheet bias instability (fit minimum / 0.664): "
+                         + " ".join(f"{v:.6e}" for v in sheet))
             pairs = []
             for term, prop in (("N", "NoiseDensity"), ("B", "BiasInstability"),
                                ("K", "RandomWalk")):
