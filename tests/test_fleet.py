@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import shutil
 
@@ -14,6 +15,7 @@ from fosmodel.core.exceptions import InputError
 from fosmodel.io.loader import load_record
 from fosmodel.io.split import SplitSpec
 from fosmodel.noise.axes import resolve_axes
+from fosmodel.study.harness import METHODS
 from fosmodel.workflows.fleet import MARKER, FleetConfig, record_name, run_fleet
 from fosmodel.workflows.imu import STEPS, ImuConfig, run_imu
 
@@ -196,3 +198,27 @@ def test_the_command_on_a_running_scheduler_gives_the_in_process_summary(files, 
     assert len(tasks.data) == len(files)  # a task per record, run there
     pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "there" / "fleet.csv"),
                                   pd.read_csv(tmp_path / "here" / "fleet.csv"))
+
+
+SUBSETS = [s for k in range(1, len(METHODS) + 1) for s in itertools.combinations(METHODS, k)]
+
+
+@pytest.mark.parametrize("methods", SUBSETS, ids=",".join)
+def test_the_study_step_takes_every_subset_of_methods(methods, files, tmp_path, capsys):
+    store = tmp_path / "store"
+    assert cli.main(["fleet", str(files[0]), "--columns", "gx_dps,ax_mps2", "--orders", "1",
+                     "--degrees", "1", "--methods", ",".join(methods), "--steps", "study",
+                     "--split", "50%,25%", "--out", str(store)]) == 0, capsys.readouterr().err
+    table = pd.read_csv(store / "fleet.csv", keep_default_na=False, na_values=[""])
+    assert list(table["axis"]) == ["gx_dps", "ax_mps2"]
+    assert (table["FOS"] == "not studied").all() != ("fos" in methods)
+    assert (table["best baseline"] == "not studied").all() != bool(set(methods) - {"fos"})
+    assert table["FOS / baseline (outage)"].notna().all() == (
+        "fos" in methods and len(methods) > 1)
+
+
+def test_a_refused_fleet_leaves_no_store_behind(files, tmp_path):
+    config = FleetConfig(imu=SMALL, split=SplitSpec.parse("150s,60s"))
+    with pytest.raises(InputError, match="^record imu0: the record has 24000 samples"):
+        run_fleet(files[:1], tmp_path / "store", config)
+    assert list(tmp_path.iterdir()) == []

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import itertools
 import json
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -11,8 +13,9 @@ import pytest
 from fosmodel.core.exceptions import InputError
 from fosmodel.io.model_file import read_model
 from fosmodel.noise.axes import resolve_axes
+from fosmodel.study.harness import METHODS
 from fosmodel.workflows.imu import ImuConfig, run_imu
-from fosmodel.workflows.imu_report import write_imu_report
+from fosmodel.workflows.imu_report import console_summary, write_imu_report, write_imu_tables
 
 SMALL = dict(orders=(1, 2), degrees=(1,), methods=("fos", "burg"), n_starts=5)
 
@@ -149,3 +152,61 @@ def test_a_loop_split_too_short_is_refused_before_any_work(record, monkeypatch):
                                          r"short for the split 0.5 / 0.45: "):
         run_imu(record.columns, axes, record.rate,
                 config=ImuConfig(**SMALL, loop_split=(0.5, 0.45), n_jobs=1))
+
+
+SUBSETS = [s for k in range(1, len(METHODS) + 1) for s in itertools.combinations(METHODS, k)]
+
+
+@pytest.fixture(scope="module")
+def every_method(record):
+    """Two axes through every step, the study with every method."""
+    axes = [a for a in resolve_axes(list(record.columns)) if a.column in ("gx_dps", "ax_mps2")]
+    return run_imu(record.columns, axes, record.rate, "static_imu",
+                   config=ImuConfig(**{**SMALL, "methods": METHODS}, n_jobs=1))
+
+
+def _with_methods(result, methods):
+    """``result`` as a run with only ``methods`` gives it: each fit is independent of the
+    others, so the study of a subset is its rows of the study of all (checked below)."""
+    config = replace(result.config, methods=methods)
+    axes = []
+    for a in result.axes:
+        rows = a.study.rows[a.study.rows["method"].str.removesuffix("+level").isin(methods)]
+        study = replace(a.study, rows=rows.reset_index(drop=True),
+                        config=replace(a.study.config, methods=methods))
+        axes.append(replace(a, study=study))
+    return replace(result, config=config, axes=axes)
+
+
+def test_the_study_of_a_subset_of_methods_is_its_rows_of_the_study_of_all(every_method, record):
+    from fosmodel.study.runner import run_study
+
+    a = every_method.axes[1]
+    config = ImuConfig(**{**SMALL, "methods": ("yw", "gm")})
+    alone = run_study(record.columns[a.axis.column], config.study_config(record.rate, a.axis))
+    pd.testing.assert_frame_equal(
+        alone.rows.drop(columns="runtime_s"),
+        _with_methods(every_method, ("yw", "gm")).axes[1].study.rows.drop(columns="runtime_s"))
+
+
+@pytest.mark.parametrize("methods", SUBSETS, ids=",".join)
+def test_every_subset_of_methods_gives_the_tables_and_the_console(every_method, methods,
+                                                                  tmp_path):
+    result = _with_methods(every_method, methods)
+    tables = write_imu_tables(result, tmp_path, "static imu")
+    study = tables["study"][0]
+    has_fos, has_base = "fos" in methods, bool(set(methods) - {"fos"})
+    assert (study["FOS"] == "not studied").all() != has_fos
+    assert (study["best baseline"] == "not studied").all() != has_base
+    assert study["FOS outage error (m, 30 s)"].notna().all() == has_fos
+    assert study["baseline outage error (m, 30 s)"].notna().all() == has_base
+    ratio = study["FOS / baseline (outage)"]
+    if has_fos and has_base:
+        np.testing.assert_array_equal(ratio, study["FOS outage error (m, 30 s)"]
+                                      / study["baseline outage error (m, 30 s)"])
+    else:
+        assert ratio.isna().all()
+    assert pd.read_csv(tmp_path / "study.csv").shape == study.shape
+    summary = console_summary(result).splitlines()
+    fos_cell, base_cell = summary[3].split()[-6:-4]  # the gx_dps line's study columns
+    assert (fos_cell == "-") != has_fos and (base_cell == "-") != has_base

@@ -321,27 +321,51 @@ def _brief(step: str, outcome: StudyResult | LoopResult) -> str:
     return f"{len(kept)} effect(s) kept"
 
 
-def _best(rows: pd.DataFrame, fos: bool) -> pd.Series:
-    """Return the row with the lowest evaluation MSE among FOS's forms or the baselines'."""
+def _best(rows: pd.DataFrame, fos: bool) -> pd.Series | None:
+    """Return the row with the lowest evaluation MSE among FOS's forms or the baselines'.
+
+    None when the study ran none of them (``methods`` without FOS, or FOS alone).
+    """
     is_fos = rows["method"].str.startswith("fos")
     pick = rows[is_fos if fos else ~is_fos]
-    return pick.loc[pick["evaluate_mse"].idxmin()]
+    return None if pick.empty else pick.loc[pick["evaluate_mse"].idxmin()]
 
 
 def study_row(axis: Axis, study: StudyResult) -> dict[str, Any]:
-    """Tabulate the best FOS and the best baseline of an axis's study (a row of the tables)."""
+    """Tabulate the best FOS and the best baseline of an axis's study (a row of the tables).
+
+    A side the study did not run (FOS alone, or baselines alone) is ``not studied``, its
+    errors and the ratio NaN: the columns are the same whatever the methods.
+    """
     rows = study.rows[study.rows["protocol"] == "fair"] if "fair" in \
         study.config.protocols else study.rows
     fos, base = _best(rows, True), _best(rows, False)
+    outage, bias = study_columns(study.config.horizon_s)
     return {"axis": axis.column, "units": axis.units,
-            "FOS": f"{fos['label']} L={fos['order']}",
-            "FOS outage error (m, 30 s)": fos["outage_position_error_m"],
-            "FOS bias RMS 30 s": fos["bias_rms_30s"],
-            "best baseline": f"{base['label']} L={base['order']}",
-            "baseline outage error (m, 30 s)": base["outage_position_error_m"],
-            "baseline bias RMS 30 s": base["bias_rms_30s"],
-            "FOS / baseline (outage)": fos["outage_position_error_m"]
-            / base["outage_position_error_m"]}
+            "FOS": _chosen(fos),
+            f"FOS {outage}": _value(fos, "outage_position_error_m"),
+            f"FOS {bias}": _value(fos, "bias_rms_30s"),
+            "best baseline": _chosen(base),
+            f"baseline {outage}": _value(base, "outage_position_error_m"),
+            f"baseline {bias}": _value(base, "bias_rms_30s"),
+            "FOS / baseline (outage)": _value(fos, "outage_position_error_m")
+            / _value(base, "outage_position_error_m")}
+
+
+def study_columns(horizon_s: float) -> tuple[str, str]:
+    """Return the names of the outage error and bias columns of :func:`study_row`.
+
+    They end each table's FOS and baseline heads; the outage horizon is the study's.
+    """
+    return f"outage error (m, {horizon_s:g} s)", "bias RMS 30 s"
+
+
+def _chosen(row: pd.Series | None) -> str:
+    return "not studied" if row is None else f"{row['label']} L={row['order']}"
+
+
+def _value(row: pd.Series | None, key: str) -> float:
+    return np.nan if row is None else float(row[key])
 
 
 def loop_row(axis: Axis, loop: LoopResult) -> dict[str, Any]:

@@ -33,7 +33,7 @@ from ..noise.axes import Axis
 from ..noise.imu_noise import ImuNoise, write_imu_noise
 from ..study.harness import StudyResult
 from ..study.report import write_study
-from .imu import AxisResult, ImuResult, in_workers
+from .imu import AxisResult, ImuResult, in_workers, study_columns
 
 
 def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]:
@@ -202,25 +202,32 @@ def _loop_warnings(result: ImuResult) -> list[str]:
 def console_summary(result: ImuResult) -> str:
     """Summarise the report for a console, in lines of at most 100 characters.
 
-    A line per axis: its noise terms, the 30 s outage error of the best FOS and the best
+    A line per axis: its noise terms, the outage error of the best FOS and the best
     baseline, and the loop's effects with the error before and after them (the report has
     the rest); then a sentence for each axis whose effects did not hold up.
     """
     noise = result.noise.table().set_index("Column")
     study, loop = result.study_table(), result.loop_table()
+    outage = study_columns(result.config.horizon_s)[0]
     frame = pd.DataFrame({
         "axis": study["axis"],
         "N": [noise.loc[c, "N fitted"] for c in study["axis"]],
         "B": [noise.loc[c, "B fitted"] for c in study["axis"]],
         "K": [noise.loc[c, "K fitted"] for c in study["axis"]],
-        "FOS (m)": study["FOS outage error (m, 30 s)"].map("{:.3g}".format),
-        "base (m)": study["baseline outage error (m, 30 s)"].map("{:.3g}".format),
+        "FOS (m)": study[f"FOS {outage}"].map(_brief_number),
+        "base (m)": study[f"baseline {outage}"].map(_brief_number),
         "kept": loop["effects kept"],
         "loop (m)": [f"{b:.3g} -> {a:.3g}" for b, a in
                      zip(loop["outage error before (m)"], loop["outage error after (m)"])],
     })
-    lines = ["Noise terms (Allan), 30 s outage position error of the best FOS and baseline "
+    lines = [f"Noise terms (Allan), {result.config.horizon_s:g} s outage position error of "
+             "the best FOS and baseline "
              "(study),", "effects kept and outage error before -> after (loop), prediction "
              "segment:", frame.to_string(index=False)]
     lines += [textwrap.fill(line, CONSOLE_WIDTH) for line in _loop_warnings(result)[:-1]]
     return "\n".join(lines)
+
+
+def _brief_number(value: float) -> str:
+    """Three significant digits; ``-`` for a side the study did not run (NaN)."""
+    return "-" if value != value else f"{value:.3g}"
