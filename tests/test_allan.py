@@ -460,3 +460,15 @@ def test_step_record_with_undefined_noise_id_still_gives_adev_and_fit():
     result = allan_deviation(y, 100.0)
     assert np.isfinite(result.adev).all() and np.isfinite(result.lower).all()
     assert fit_noise(result).coefficients["K"] > 0  # a step looks like a rate random walk
+
+
+def test_cli_reads_the_units_in_a_column_s_name(tmp_path, capsys):
+    """``allan --column "Accel X (g)"``: the units from the name, as every command reads them."""
+    rng = np.random.default_rng(4)
+    path = tmp_path / "a.csv"
+    pd.DataFrame({"Accel X (g)": rng.normal(0.0, 1e-3, 20_000)}).to_csv(path, index=False)
+    assert cli.main(["allan", str(path), "--column", "Accel X (g)", "--rate", "100", "--out",
+                     str(tmp_path / "allan")]) == 0
+    out = capsys.readouterr().out
+    assert "Units:                              g" in out
+    assert "Sensor:                         accel" in out

@@ -649,3 +649,17 @@ def test_allan_takes_units_per_column_beside_the_names(tmp_path, capsys):
                               tmp_path / "one"], capsys)
     assert code == 0, err
     assert "Sensor:" in stdout and "accel" in stdout
+
+
+def test_close_loop_reads_the_units_in_a_column_s_name(tmp_path, capsys):
+    rng = np.random.default_rng(2)
+    path = tmp_path / "gz.csv"
+    gz = lfilter([1.0], [1.0, -0.9], rng.standard_normal(30_000)) * 0.01 + 0.3
+    pd.DataFrame({"gz_dps": gz}).to_csv(path, index=False)
+    code, out, err = _run(["close-loop", path, "--column", "gz_dps", "--rate", "100", "--out",
+                           tmp_path / "loop"], capsys)
+    assert code == 0, err
+    lines = out.splitlines()
+    assert lines[0] == ("prediction segment: MSE (deg/s)^2, outage position error (m, 30 s), "
+                        "bias RMS (deg/s)")
+    assert lines[2].split()[-2] != "-"  # the outage error of the starting model, in metres

@@ -32,7 +32,7 @@ from ..io.output import (
     write_text,
 )
 from ..models.model import FOSModel
-from ..noise.axes import SENSORS, Axis, resolve_axes
+from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
@@ -55,11 +55,13 @@ def _axes(args: argparse.Namespace, columns: list[str], rec: Record,
           optional: bool = False) -> list[Axis]:
     """Resolve each column's sensor and units (:func:`~fosmodel.noise.axes.resolve_axes`).
 
-    From --units, the file, --sensor, --gyro-units/--accel-units or its name; none if
-    ``optional`` and none is given.
+    From --units, the file, --sensor, --gyro-units/--accel-units or its name (``gz_dps``,
+    ``Accel X (g)``), as every command reads them; none if ``optional`` and none is told.
     """
     per_sensor = {s: units for s in SENSORS if (units := vars(args).get(f"{s}_units"))}
-    if optional and not (args.sensor or args.units or per_sensor or set(columns) & set(rec.units)):
+    named = all(None not in infer_axis(c) for c in columns)
+    if optional and not (args.sensor or args.units or per_sensor or named
+                         or set(columns) & set(rec.units)):
         return []
     return resolve_axes(columns, per_sensor, given=args.units, declared=rec.units,
                         sensor=args.sensor)
