@@ -106,3 +106,27 @@ def test_the_help_lists_the_options_with_their_defaults(capsys):
                             ("--split", "180s,180s"), ("--loop-split", "50%,20%"),
                             ("--jobs", "2")):
         assert option in text and f"(default: {default})" in text, option
+
+
+def test_a_readable_header_goes_through_every_step(readable_csv, tmp_path, capsys):
+    """``Gyro X (deg/s),...,Accel X (g)``: units from the names, a loop that takes another
+    axis as its input, reports in folders named after the columns, models that apply again."""
+    from fosmodel.io.model_file import read_model
+    from fosmodel.io.output import path_name
+
+    out = tmp_path / "report"
+    code, _, err = _run(["imu", readable_csv, "--rate", "100", "--split", "60s,60s",
+                         "--orders", "1", "--degrees", "1", "--methods", "fos,burg",
+                         "--jobs", "1", "--out", out], capsys)
+    assert code == 0, err
+    frame = pd.read_csv(readable_csv)
+    assert "fosmodel: Accel X (g): accel in g (from the name)" in err
+    assert "fosmodel: Gyro Z (deg/s): gyro in deg/s (from the name)" in err
+    assert list(pd.read_csv(out / "study.csv")["axis"]) == list(frame.columns)
+    assert "aux Accel Y (g) (lags 0-" in (out / "loop" / "Accel_X_g_" / "report.md").read_text()
+    for column in frame.columns:
+        assert (out / "study" / path_name(column) / "report.md").is_file()
+        model = read_model(out / "models" / f"{path_name(column)}.json")
+        channels = {name: frame[name].to_numpy() for name in model.input_columns()}
+        pred = model.predict(frame[column].to_numpy(), channels)
+        assert np.isfinite(pred[model.lag_window_:]).all()

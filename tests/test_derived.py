@@ -123,3 +123,21 @@ def test_a_driver_s_forms_compute_what_their_names_say():
     with pytest.raises(InputError, match="shorter than one sample"):
         derive(lowpass_name("Die temp (C)", 0.001), N, RATE, channels, {})
     assert not is_derived("pow(cos@1Hz,2,0)")  # a power reads a channel or its lag only
+
+
+def test_a_spelled_token_is_its_channel_as_an_input_with_lags():
+    """``Accel Y (g)`` enters a model as the input ``u__...``: rebuilt from the record's column
+    of that header, its square centred on the mean the fitted model keeps under the token."""
+    from fosmodel.core.candidates import CandidateSpec
+    from fosmodel.core.derived import channel_token, square_name
+
+    rng = np.random.default_rng(1)
+    x = rng.normal(2.0, 1.0, N)
+    token = channel_token("Accel Y (g)")
+    assert is_derived(token) and channels_read([token]) == ["Accel Y (g)"]
+    np.testing.assert_array_equal(derive(token, N, RATE, {"Accel Y (g)": x}, {}), x)
+    spec = CandidateSpec(2, 1, {token: 3}, [square_name("Accel Y (g)")])
+    assert channels_read([*spec.exog_lags, *spec.columns]) == ["Accel Y (g)"]
+    square = derive(square_name("Accel Y (g)"), N, RATE, {"Accel Y (g)": x}, {token: 2.0})
+    np.testing.assert_allclose(square, (x - 2.0) ** 2)
+    assert not is_derived("temp_c") and not is_derived("u_x")

@@ -22,6 +22,8 @@ name                       value at sample ``n`` (``t = n / rate`` from the reco
 ``rate(<ch>,<T>s)``        the rate of change of ``lowpass(<ch>,<T>s)`` per second,
                            ``(s[n] - s[n-1]) rate`` (0 at ``n = 0``): a smoothed derivative
 ``pow(<x>,<p>,<c>)``       ``(x - c)^p`` of ``x`` a channel or a ``lowpass(...)`` of one
+``u__<spelled>``           the channel a spelled-out token names, as it is: an input channel
+                           whose header is not an identifier (``Accel X (g)``)
 =========================  ===========================================================
 
 ``<ch>`` is a channel *token* (:func:`channel_token`): the column's own name when it
@@ -59,6 +61,9 @@ _PATTERNS = {
     "lowpass": re.compile(rf"^lowpass\({_TOKEN},{_NUMBER}s\)$"),
     "rate": re.compile(rf"^rate\({_TOKEN},{_NUMBER}s\)$"),
     "power": re.compile(rf"^pow\((.+),([0-9]+),{_SIGNED}\)$"),
+    # last: a spelled-out token is the channel itself, so that a header that is not an
+    # identifier can be an input channel with lags (``ch[n-k]`` needs an identifier)
+    "channel": re.compile(r"^(u__[A-Za-z0-9_]*)$"),
 }
 #: Kinds whose first argument is a channel token.
 _READS = ("square", "fast", "lowpass", "rate")
@@ -248,12 +253,17 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
         x = (_channel(name, text, n, channels) if kind_of_base == "channel"
              else derive(text, n, rate, channels, offsets))
         return (x - centre) ** p
+    if kind == "channel":
+        return _channel(name, found[1], n, channels)
     if kind == "square":
         channel = token_channel(found[1])
-        if channel not in channels or channel not in offsets:
+        # the mean by the channel's name, or by its token (a fitted model's offsets name its
+        # input channels as its terms do)
+        mean = offsets.get(channel, offsets.get(found[1]))
+        if channel not in channels or mean is None:
             raise InputError(f"column {name!r} needs the channel {channel!r} and its training "
                              "mean")
-        return (_channel(name, found[1], n, channels) - offsets[channel]) ** 2
+        return (_channel(name, found[1], n, channels) - mean) ** 2
     if kind in _READS:
         x = _channel(name, found[1], n, channels)
         if kind == "fast":
@@ -276,7 +286,7 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
 
 
 def _channel(name: str, token: str, n: int, channels: Mapping[str, np.ndarray]) -> np.ndarray:
-    """The first ``n`` samples of the channel ``token`` stands for, which ``name`` reads."""
+    """Return the first ``n`` samples of the channel ``token`` names (``name`` reads it)."""
     channel = token_channel(token)
     if channel not in channels:
         raise InputError(f"column {name!r} needs the channel {channel!r}")

@@ -247,6 +247,14 @@ def _move(tmp: Path, out: Path) -> None:
         os.replace(tmp, out)
 
 
+def path_name(name: str) -> str:
+    """Return a column's name as a file or folder name: ``Gyro X (deg/s)`` -> ``Gyro_X_deg_s_``.
+
+    Headers hold spaces, brackets and slashes; a slash would make a folder of its own.
+    """
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "column"
+
+
 def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str, caption: str | None = None,
                  report: str = "") -> list[Path]:
     """``stem.md``, ``stem.csv`` and ``stem.tex`` in ``out_dir``, each written atomically.

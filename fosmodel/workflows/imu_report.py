@@ -25,7 +25,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..io.model_file import write_model
-from ..io.output import write_tables, write_text
+from ..io.output import path_name, write_tables, write_text
 from ..loop.closeloop import LoopResult
 from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
 from ..models.summary import markdown_table
@@ -105,17 +105,20 @@ def report_parts(
     """List the reports of the steps given, each a writer and its arguments.
 
     The noise of every axis in ``noise/``, and each axis's study and loop in
-    ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of the steps it ran).
+    ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of the steps it ran),
+    ``AXIS`` the column's name as a file name (:func:`fosmodel.io.output.path_name`).
     """
     parts: list[tuple[Callable, tuple]] = []
     if noise is not None:
         parts.append((write_imu_noise, (noise, _mkdir(out_dir / "noise"), title)))
     for a in axes:
         if studies:
-            parts.append((write_study, (studies[a.column], out_dir / "study" / a.column,
+            parts.append((write_study, (studies[a.column],
+                                        out_dir / "study" / path_name(a.column),
                                         f"{title} {a.column} ({a.units})")))
         if loops:
-            parts.append((write_loop_report, (loops[a.column], out_dir / "loop" / a.column,
+            parts.append((write_loop_report, (loops[a.column],
+                                              out_dir / "loop" / path_name(a.column),
                                               f"{title} {a.column}")))
     return parts
 
@@ -135,7 +138,7 @@ def _write_model(result: ImuResult, a: AxisResult, folder: Path) -> tuple[Path, 
     bound, which = ((a.loop.base_model, "the loop's starting model (its effects made the "
                      "prediction segment worse)") if worse and a.loop.steps
                     else (a.loop.final_model, "the loop's final model"))
-    path = folder / f"{a.axis.column}.json"
+    path = folder / f"{path_name(a.axis.column)}.json"
     meta = {"source": result.source, "column": a.axis.column, "units": a.axis.units,
             "sensor": a.axis.sensor, "rate_hz": result.rate, "n_samples": result.n_samples,
             "fitted_on": "close-loop fitting segment", "model": which}
