@@ -81,9 +81,12 @@ def test_refusals_take_one_line_and_write_nothing(imu_csv, tmp_path, capsys):
     code, _, err = _run(["imu", path, *FAST, "--out", out], capsys)
     assert code == 2 and not out.exists()
     assert err.strip().splitlines()[-1] == (
-        "fosmodel: error: the record has 30000 samples (300 s at 100 Hz); the split 180 s / "
-        "180 s leaves 0 samples to predict, 6000 are needed (a 30 s outage horizon and two "
-        "30 s bias windows)")
+        "fosmodel: error: the record has 30000 samples (300 s at 100 Hz), too short for these "
+        "settings, which need at least 420 s: the study needs 420 s (the split 180 s / 180 s "
+        "leaves 0 samples to predict, 6000 are needed (a 30 s outage horizon and two 30 s bias "
+        "windows)); the loop needs 420 s (on the study's segments, which the record does not "
+        "hold); shorten --split (the loop's: --loop-split) or --horizon, or give a longer "
+        "record")
     other = tmp_path / "other.csv"
     pd.DataFrame({"time": np.arange(100) / 10, "foo": np.ones(100), "bar": np.zeros(100)}
                  ).to_csv(other, index=False)
@@ -103,9 +106,10 @@ def test_the_help_lists_the_options_with_their_defaults(capsys):
         main(["imu", "--help"])
     text = " ".join(capsys.readouterr().out.split())  # as one line, however argparse wraps
     for option, default in (("--orders", "1-10"), ("--protocol", "fair"),
-                            ("--split", "180s,180s"), ("--loop-split", "50%,20%"),
-                            ("--jobs", "2")):
+                            ("--split", "180s,180s"), ("--jobs", "2")):
         assert option in text and f"(default: {default})" in text, option
+    assert "--loop-split" in text and "(default: the study's, so that both score on one " \
+        "prediction segment)" in text
 
 
 def test_a_readable_header_goes_through_every_step(readable_csv, tmp_path, capsys):

@@ -163,10 +163,14 @@ def test_a_split_too_long_for_a_record_is_refused_by_name(files, tmp_path):
     config = FleetConfig(imu=SMALL, split=SplitSpec.parse("150s,60s"))
     with pytest.raises(InputError) as error:
         run_fleet(files[:1], tmp_path, config)
-    assert str(error.value) == (
-        "record imu0: the record has 24000 samples (240 s at 100 Hz); the split 150 s / 60 s "
+    message = str(error.value)
+    assert message.startswith(
+        "record imu0: the record has 24000 samples (240 s at 100 Hz), too short for these "
+        "settings, which need at least 270 s: the study needs 270 s (the split 150 s / 60 s "
         "leaves 3000 samples to predict, 6000 are needed (a 30 s outage horizon and two 30 s "
-        "bias windows) (1 of 1 records failed)")
+        "bias windows)); the loop needs 270 s (")
+    assert message.endswith("shorten --split (the loop's: --loop-split) or --horizon, or give "
+                            "a longer record (1 of 1 records failed)")
     assert list(tmp_path.iterdir()) == []
 
 

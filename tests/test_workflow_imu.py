@@ -56,7 +56,7 @@ def test_the_rows_are_the_steps_run_alone(result, record):
     from fosmodel.study.runner import run_study
 
     a = result.axes[3]
-    config = ImuConfig(**SMALL)
+    config = ImuConfig(**SMALL).for_record(len(record.columns[a.axis.column]), record.rate)
     alone = run_study(record.columns[a.axis.column], config.study_config(record.rate, a.axis))
     pd.testing.assert_frame_equal(alone.rows.drop(columns="runtime_s"),
                                   a.study.rows.drop(columns="runtime_s"))
@@ -148,8 +148,10 @@ def test_a_loop_split_too_short_is_refused_before_any_work(record, monkeypatch):
 
     monkeypatch.setattr(workflow, "imu_noise", lambda *a, **k: pytest.fail("Allan ran"))
     axes = resolve_axes(list(record.columns))[:1]
-    with pytest.raises(InputError, match=r"^the record \(60000 samples, 600 s at 100 Hz\) is too "
-                                         r"short for the split 0.5 / 0.45: "):
+    with pytest.raises(InputError, match=r"^the record has 60000 samples \(600 s at 100 Hz\), "
+                                         r"too short for these settings, which need at least "
+                                         r"1199.9 s: the loop needs 1199.9 s \(the split 0.5 / "
+                                         r"0.45: the evaluation segment needs "):
         run_imu(record.columns, axes, record.rate,
                 config=ImuConfig(**SMALL, loop_split=(0.5, 0.45), n_jobs=1))
 
@@ -210,3 +212,44 @@ def test_every_subset_of_methods_gives_the_tables_and_the_console(every_method, 
     summary = console_summary(result).splitlines()
     fos_cell, base_cell = summary[3].split()[-6:-4]  # the gx_dps line's study columns
     assert (fos_cell == "-") != has_fos and (base_cell == "-") != has_base
+
+
+@pytest.mark.parametrize("settings", [dict(train_s=180.0, evaluate_s=180.0),
+                                      dict(train_s=20.0, evaluate_s=30.0, horizon_s=5.0),
+                                      dict(train_s=20.0, evaluate_s=30.0, loop_split=(0.3, 0.3))])
+def test_the_least_length_a_short_record_is_told_is_the_least_that_runs(settings):
+    """The one message of a record too short gives the least length these settings take:
+    a record of that many samples passes every step's check, one sample fewer does not."""
+    import re
+
+    axes = resolve_axes(["gx_dps"])
+    config = ImuConfig(**SMALL, **settings)
+    with pytest.raises(InputError) as error:
+        config.check(6_000, 100.0, axes)
+    message = str(error.value)
+    assert message.startswith("the record has 6000 samples (60 s at 100 Hz), too short for "
+                              "these settings, which need at least ")
+    least = round(float(re.search(r"which need at least ([0-9.]+) s", message)[1]) * 100)
+    config.check(least, 100.0, axes)
+    with pytest.raises(InputError):
+        config.check(least - 1, 100.0, axes)
+
+
+def test_a_segment_too_short_for_its_windows_is_told_whatever_the_length():
+    config = ImuConfig(**SMALL, train_s=4.0, evaluate_s=4.0)
+    with pytest.raises(InputError, match=r"^the record has 6000 samples \(60 s at 100 Hz\), "
+                                         r"too short for these settings: the study needs 68 s "
+                                         r"\(.*\); the loop cannot run "
+                                         r"with these settings, whatever the record's length "
+                                         r"\(.*three 5 s outages.*\); change --split \(the "
+                                         r"loop's: --loop-split\) or --horizon$"):
+        config.check(6_000, 100.0, resolve_axes(["gx_dps"]))
+
+
+def test_the_loop_scores_on_the_study_s_prediction_segment_unless_given_its_own(result):
+    """One split by default: an axis's study and loop errors are on one prediction segment."""
+    for a in result.axes:
+        assert a.loop.segments == a.study.split
+    config = ImuConfig(**SMALL, loop_split=(0.5, 0.2)).for_record(60_000, 100.0)
+    assert config.loop_split == (0.5, 0.2)
+    assert ImuConfig(**SMALL).for_record(60_000, 100.0).loop_split == (0.3, 0.3)

@@ -70,8 +70,10 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
                         help="the study's protocol (paper: baselines on denoised data)")
     parser.add_argument("--split", type=parsed(SplitSpec.parse), default="180s,180s",
                         metavar="TRAIN,EVALUATE", help="the study's segments: " + SPLIT_HELP)
-    parser.add_argument("--loop-split", type=parsed(SplitSpec.parse), default="50%,20%",
-                        metavar="TRAIN,EVALUATE", help="the loop's segments: " + SPLIT_HELP)
+    parser.add_argument("--loop-split", type=parsed(SplitSpec.parse), metavar="TRAIN,EVALUATE",
+                        help="the loop's segments, if not those of --split: " + SPLIT_HELP
+                        + " (default: the study's, so that both score on one prediction "
+                          "segment)")
     parser.add_argument("--horizon", type=positive_float, default="30",
                         help="outage horizon in seconds")
     parser.add_argument("--min-tau", type=positive_float,
@@ -99,10 +101,15 @@ def imu(args: argparse.Namespace) -> int:
     for axis in axes:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
     rate = rec.require_rate()
-    train_s, evaluate_s = args.split.seconds(rec.n_samples, rate)
-    config = ImuConfig(**workflow_settings(args), train_s=train_s, evaluate_s=evaluate_s,
-                       loop_split=args.loop_split.fractions(rec.n_samples, rate),
-                       n_jobs=args.jobs)
+
+    def at(n: int) -> ImuConfig:  # the settings for a record of n samples
+        train_s, evaluate_s = args.split.seconds(n, rate)
+        return ImuConfig(**workflow_settings(args), train_s=train_s, evaluate_s=evaluate_s,
+                         loop_split=args.loop_split and args.loop_split.fractions(n, rate),
+                         n_jobs=args.jobs)
+
+    at(rec.n_samples).check(rec.n_samples, rate, axes, at=at)  # too short: one message
+    config = at(rec.n_samples)
     result = run_imu({a.column: rec.column(a.column) for a in axes}, axes, rate, rec.source,
                      aux=aux, config=config,
                      progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,
