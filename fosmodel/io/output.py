@@ -1,10 +1,9 @@
 """Safe file output: never over an input, and either the old version or the complete new one.
 
-Every file fosmodel writes goes through :func:`atomic_write`: the content is
-written to a temporary file in the destination directory and renamed over the
-destination, so an interrupted run never leaves a half-written result.  The
-temporary file's name carries the writer's process id: one left behind by a
-killed run is removed by the next write to the same destination.  A report
+Every file fosmodel writes goes through :func:`~fosmodel.core.files.atomic_write` (a
+temporary file renamed over the destination, so an interrupted run never leaves a
+half-written result; imported here with :func:`~fosmodel.core.files.write_text` for the
+writers of reports).  A report
 directory is written beside its destination and moved into place in one step
 (:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
 that no output names a file the command reads, however the two are spelt.
@@ -21,14 +20,14 @@ import math
 import os
 import re
 import shutil
-import uuid
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import IO, TYPE_CHECKING
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..core.exceptions import InputError
+from ..core.files import atomic_write, remove_path, stale_temporaries, temporary_path, write_text
 from ..models.latex import latex_table, table_label
 from ..models.summary import markdown_table
 
@@ -107,91 +106,6 @@ def writable_directory(path: str | os.PathLike[str]) -> Path:
     return out
 
 
-def _temporary_name(path: Path, suffix: str) -> Path:
-    return path.parent / f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}{suffix}"
-
-
-def _stale(path: Path, suffix: str) -> Iterator[Path]:
-    """Temporary files or directories for ``path`` whose writer is no longer running."""
-    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(\d+)\.[0-9a-f]{{12}}{re.escape(suffix)}$")
-    with contextlib.suppress(OSError):
-        for item in path.parent.iterdir():
-            m = pattern.match(item.name)
-            if m and not _alive(int(m.group(1))):
-                yield item
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
-    return True
-
-
-def _remove(item: Path) -> None:
-    if item.is_dir() and not item.is_symlink():
-        shutil.rmtree(item, ignore_errors=True)
-    else:
-        with contextlib.suppress(FileNotFoundError):
-            item.unlink()
-
-
-@contextlib.contextmanager
-def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
-    """Open a temporary file beside ``path``; rename it onto ``path`` on success.
-
-    Parameters
-    ----------
-    path : path-like
-        Destination.  Its directory must exist.
-    mode : {"w", "wb"}
-        Text or binary mode.
-
-    Yields
-    ------
-    file object
-        Write the content to it.  If the body raises, the temporary file is
-        removed and ``path`` is left untouched.
-    """
-    if mode not in ("w", "wb"):
-        raise ValueError(f"mode must be 'w' or 'wb', not {mode!r}")
-    path = Path(path)
-    for item in _stale(path, ".tmp"):  # left behind by a killed run
-        _remove(item)
-    tmp = _temporary_name(path, ".tmp")
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
-    try:
-        fh = (os.fdopen(fd, "w", encoding="utf-8", newline="") if mode == "w"
-              else os.fdopen(fd, "wb"))
-        with fh:
-            yield fh
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-
-
-def write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` atomically (UTF-8)."""
-    with atomic_write(path, "w") as fh:
-        fh.write(text)
-
-
-def _mode() -> int:
-    """Return the permission bits of a new file under the process's umask (0666 & ~umask)."""
-    umask = os.umask(0)
-    os.umask(umask)
-    return 0o666 & ~umask
-
-
 @contextlib.contextmanager
 def report_directory(out: str | os.PathLike[str],
                      protected: Iterable[str | os.PathLike[str]] = ()) -> Iterator[Path]:
@@ -208,9 +122,9 @@ def report_directory(out: str | os.PathLike[str],
     while not base.is_dir():  # beside out, or in its nearest existing ancestor
         base = base.parent
     target = base / out.name
-    for item in _stale(target, ".tmpdir"):
-        _remove(item)
-    tmp = _temporary_name(target, ".tmpdir")
+    for item in stale_temporaries(target, ".tmpdir"):
+        remove_path(item)
+    tmp = temporary_path(target, ".tmpdir")
     tmp.mkdir()
     try:
         yield tmp
