@@ -98,6 +98,12 @@ def test_the_report_holds_every_axis_the_exports_and_the_models(pair, record, tm
     paths = write_imu_report(result, tmp_path, "static imu")
     assert all(p.is_file() for p in paths)
     page = (tmp_path / "report.md").read_text()
+    # every error says what it is, its horizon and its segment: one segment for both steps
+    assert ("- Outage position error (m, 30 s): in each of 5 outages of 30 s spread evenly over "
+            "the prediction segment (360-600 s of the record), the model's free run") in page
+    assert ("- Errors on the prediction segment (360-600 s of the record) (the study's: both "
+            "steps score on one segment)") in page
+    assert page.count("What the columns are:") == 2
     columns = [a.axis.column for a in result.axes]
     for column in columns:
         assert f"| {column} |" in page

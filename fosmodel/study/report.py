@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from ..io.output import save_figure, write_tables, write_text
 from ..models.latex import mathtext_units
 from ..models.summary import markdown_table
+from ..noise.metrics import caption_note, metric_definitions, segment_text
 from .harness import LEVEL, StudyResult, method_label
 
 _ORDER = ["yw", "cov", "burg", "gm", "fos"]
@@ -127,17 +128,20 @@ def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
     """Every table and figure of a study, plus ``report.md`` that shows them."""
     out_dir.mkdir(parents=True, exist_ok=True)
     orders = " and ".join(map(str, table_orders(result)))
+    note = caption_note(result.config.horizon_s, result.config.n_starts,
+                        segment_text("prediction", result.split.predict, result.config.rate))
     tables = {
         "comparison": (paper_table(result), f"{title}: prediction and outage errors of every "
-                       f"method at model orders {orders} (the FOS paper's Tables 1-2 layout)"),
-        "study": (study_table(result), f"{title}: every configuration scored"),
+                       f"method at model orders {orders} (the FOS paper's Tables 1-2 layout). "
+                       f"{note}"),
+        "study": (study_table(result), f"{title}: every configuration scored. {note}"),
         "best": (study_table(result, result.best()),
                  f"{title}: the best configuration of each method, chosen on the evaluation "
-                 "segment"),
+                 f"segment. {note}"),
     }
     if result.config.levels and "fair" in result.config.protocols:
         tables["level"] = (level_table(result), f"{title}: each method about the local level "
-                           "(fair protocol)")
+                           f"(fair protocol). {note}")
     paths = []
     for stem, (table, caption) in tables.items():
         paths += write_tables(table, out_dir, stem, caption, report=title)
@@ -167,6 +171,7 @@ def report_markdown(result: StudyResult, title: str) -> str:
         f"## Comparison at orders {' and '.join(map(str, table_orders(result)))} (FOS paper, "
         "Tables 1-2 layout)", "",
         markdown_table(paper_table(result), digits=4), "",
+        *_definitions(result), "",
         "## Best configuration per method (chosen on the evaluation segment)", "",
         markdown_table(study_table(result, result.best()), digits=4), "",
     ]
@@ -188,3 +193,13 @@ def report_markdown(result: StudyResult, title: str) -> str:
         lines += ["## Warnings", "", *[f"- {w}" for w in result.warnings], ""]
     lines += ["All rows: `study.csv` (also `.md`, `.tex`).", ""]
     return "\n".join(lines)
+
+
+def _definitions(result: StudyResult) -> list[str]:
+    """List under the first table what each metric is: its units, horizon and segment."""
+    cfg, split = result.config, result.split
+    defined = metric_definitions(cfg.units, cfg.horizon_s, cfg.n_starts,
+                                 segment_text("prediction", split.predict, cfg.rate),
+                                 segment_text("evaluation", split.evaluate, cfg.rate))
+    keys = ("mse", "position_error_m", "outage_position_error_m", "bias_rms", "evaluate_mse")
+    return ["What the columns are:", "", *[f"- {defined[k]}" for k in keys]]

@@ -31,6 +31,7 @@ from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
 from ..models.summary import markdown_table
 from ..noise.axes import Axis
 from ..noise.imu_noise import ImuNoise, write_imu_noise
+from ..noise.metrics import metric_definitions, segment_text
 from ..study.harness import StudyResult
 from ..study.report import write_study
 from .imu import AxisResult, ImuResult, in_workers, study_columns
@@ -73,12 +74,18 @@ def write_imu_tables(result: ImuResult, out_dir: Path,
     dict
         Each table's stem to the table and its caption.
     """
+    study, loop = _segments(result)
+    cfg = result.config
     tables = {
         "noise": (result.noise.table(), f"{title}: Allan noise parameters of every axis"),
         "study": (result.study_table(), f"{title}: best FOS and best baseline of each axis "
-                  "(chosen on the evaluation segment), errors on the prediction segment"),
+                  f"(chosen on the evaluation segment), errors on {study}: outage error, the "
+                  f"RMS position error at the end of {cfg.n_starts} free runs of "
+                  f"{cfg.horizon_s:g} s; bias RMS, the RMS of the one-step residual's 30 s "
+                  "means (in the axis's units)"),
         "loop": (result.loop_table(), f"{title}: the residual loop of each axis, errors on "
-                 "the prediction segment before and after the effects kept"),
+                 f"{loop} before and after the effects kept (outage error: at the end of "
+                 f"{cfg.horizon_s:g} s free runs; bias RMS in the axis's units)"),
         "timing": (result.timing_table(), f"{title}: run time of each step"),
     }
     for stem, (frame, caption) in tables.items():
@@ -173,6 +180,8 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
         frame, caption = tables[stem]
         lines += [f"## {heading}", "", text, "", f"Table: {caption}.", "",
                   markdown_table(frame, digits=4), ""]
+        if stem != "noise":
+            lines += [*_definitions(result, stem), ""]
         if stem == "loop":
             lines += _loop_warnings(result)
     lines += ["## Error models for a filter", "",
@@ -188,6 +197,32 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
               f"the loop of each axis, {result.config.n_jobs} at a time.", "",
               markdown_table(frame, digits=4), ""]
     return "\n".join(lines)
+
+
+def _segments(result: ImuResult) -> tuple[str, str]:
+    """Name the prediction segments of the study and of the loop, with their bounds (s)."""
+    a = result.axes[0]
+    return (segment_text("prediction", a.study.split.predict, result.rate),
+            segment_text("prediction", a.loop.segments.predict, result.rate))
+
+
+def _definitions(result: ImuResult, stem: str) -> list[str]:
+    """Define the study's or the loop's columns: units, horizon, segment."""
+    study, loop = _segments(result)
+    cfg = result.config
+    defined = metric_definitions(None, cfg.horizon_s, cfg.n_starts,
+                                 study if stem == "study" else loop)
+    same = (" (the study's: both steps score on one segment)" if study == loop
+            else f" (not the study's {study.removeprefix('the ')})")
+    lines = [f"- {defined['outage_position_error_m']}",
+             f"- {defined['bias_rms'].replace('(units)', '(the axis units)')}"]
+    if stem == "loop":
+        lines.insert(0, f"- Errors on {loop}{same}, of the loop's starting model (before) and "
+                        "final model (after).")
+    else:
+        lines.append("- FOS / baseline (outage): the first outage error over the second; below "
+                     "1, FOS does better.")
+    return ["What the columns are:", "", *lines]
 
 
 def _loop_warnings(result: ImuResult) -> list[str]:
