@@ -115,7 +115,8 @@ def build_parser() -> argparse.ArgumentParser:
                       help="columns that may explain the residual (default: every other column)")
     loop.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS",
                       help="units of the column (deg/s, or gx=deg/s), which tell the sensor, "
-                           "for position errors (default: none, no position errors)")
+                           "for position errors (default: from the column's name, e.g. gz_dps; "
+                           "else none, no position errors)")
     loop.add_argument("--sensor", choices=("accel", "gyro"),
                       help="sensor of the column (the units tell it; checked against them)")
     loop.add_argument("--max-lag", type=int, default=10, help="L of the starting model")
@@ -139,8 +140,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "units come from the names (gx_dps, acc_y_mps2) where not given")
     add_loader_options(allan, contiguous="the Allan deviation")
     allan.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS,...",
-                       help=UNITS_HELP + "; for navigation units (default: --columns from "
-                                          "the names; --column in its own units)")
+                       help=UNITS_HELP + "; for navigation units (default: from the "
+                                          "names, e.g. gx_dps; a --column whose name tells "
+                                          "none in its own units)")
     allan.add_argument("--sensor", choices=("accel", "gyro"),
                        help="sensor of every column (the units tell it; checked against them)")
     allan.add_argument("--gyro-units", metavar="UNITS",
