@@ -487,7 +487,7 @@ def test_verbose_after_the_command_shows_the_traceback_of_a_bug(record, tmp_path
     def broken(*args, **kwargs):
         raise RuntimeError("a bug")
 
-    monkeypatch.setattr("fosmodel.cli.commands.read_model", broken)
+    monkeypatch.setattr("fosmodel.io.model_file.read_model", broken)  # predict imports it
     argv = ["predict", record, "--model", tmp_path / "m.json", "--out", tmp_path / "p.csv"]
     code, _, err = _run([*argv, "-v"], capsys)
     assert code == 1 and "Traceback" in err and "RuntimeError: a bug" in err
