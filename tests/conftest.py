@@ -73,6 +73,28 @@ def readable_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture
+def figure_log(tmp_path: Path,
+               monkeypatch: pytest.MonkeyPatch) -> Callable[[], Callable[[], dict[str, str]]]:
+    """Check every figure written from here on (also in worker processes).
+
+    ``log = figure_log()`` sets ``FOSMODEL_FIGURE_LOG`` (:mod:`fosmodel.io.figures`);
+    ``log()`` then maps each figure written, the end of its path, to what a reader could not
+    read in it (empty: nothing).
+    """
+    def start() -> Callable[[], dict[str, str]]:
+        path = tmp_path / "figures.log"
+        monkeypatch.setenv("FOSMODEL_FIGURE_LOG", str(path))
+
+        def read() -> dict[str, str]:
+            lines = path.read_text().splitlines() if path.exists() else []
+            return dict(line.split("\t", 1) for line in lines)
+
+        return read
+
+    return start
+
+
+@pytest.fixture
 def bursty_csv(tmp_path: Path) -> Callable[..., tuple[Path, float]]:
     """A writer of ``bursty.csv`` in the test's ``tmp_path``: 100 Hz samples received by a host
     in bursts of 5, 1 ms apart, every 50 ms.

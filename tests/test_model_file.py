@@ -1,4 +1,4 @@
-"""Model files: FOSModel.save / FOSModel.load, the JSON `fosmodel fit` writes, checked on reading."""
+"""Model files: FOSModel.save and load, the JSON `fosmodel fit` writes, checked on reading."""
 
 import json
 

@@ -11,9 +11,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from ..io.figures import legend_outside
 from ..io.output import save_figure, write_tables, write_text
 from ..models.latex import mathtext_units
 from ..models.summary import markdown_table
@@ -92,36 +94,71 @@ def level_table(result: StudyResult) -> pd.DataFrame:
 
 
 def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
-    """One-step prediction MSE and outage position error against model order, per method."""
+    """One-step prediction MSE and outage position error against model order, per method.
+
+    A row of panels per metric and, under the fair protocol with levels, a column per
+    family: the methods as they are, and about the local level, so that each panel shows a
+    handful of series.  A method keeps its colour and marker in every panel, methods whose
+    points coincide are set a little apart along the order axis so that none hides another,
+    and one legend sits beside the panels.  A row's scale is logarithmic when its values span
+    more than a decade.
+    """
     cfg = result.config
     rows = result.rows[result.rows["protocol"] == protocol]
     # about the level a baseline has a row per time constant: the one chosen on evaluation
     rows = rows.loc[rows.groupby(["method", "order", "degree"], sort=False)["evaluate_mse"]
                     .idxmin()]
-    fig = Figure(figsize=(10, 4.2), layout="constrained")
-    axes = fig.subplots(1, 2)
-    for ax, col, ylabel in (
-        (axes[0], "mse", mathtext_units(f"one-step prediction MSE ({cfg.units})^2")),
-        (axes[1], "outage_position_error_m",
-         f"position error after a {cfg.horizon_s:g} s outage (m)"),
-    ):
-        for (method, degree), group in rows.groupby(["method", "degree"], sort=False):
-            label = method_label(method, degree)
-            if method.removesuffix(LEVEL) == "gm":
-                ax.axhline(group[col].iloc[0], ls="--" if method == "gm" else ":", color="0.5",
-                           label=label)
-            else:
-                group = group.sort_values("order")
-                ax.plot(group["order"], group[col], marker="o", label=label)
-        ax.set_yscale("log")
-        ax.set_xlabel("model order (maximum lag L)")
-        ax.set_ylabel(ylabel)
-        ax.set_xticks(sorted(rows["order"].unique()))
-        ax.grid(True, which="both", alpha=0.3)
-    axes[0].legend(fontsize="small")
+    level = rows["method"].str.endswith(LEVEL)
+    families = [("as they are", ~level), ("about the local level", level)] if level.any() \
+        else [("", ~level)]
+    styles = _styles(rows)
+    fig = Figure(figsize=(3.4 + 3.6 * len(families), 6.2), layout="constrained")
+    axes = fig.subplots(2, len(families), squeeze=False, sharex=True, sharey="row")
+    metrics = (("mse", mathtext_units(f"one-step prediction MSE ({cfg.units})^2")),
+               ("outage_position_error_m",
+                f"position error after a {cfg.horizon_s:g} s outage (m)"))
+    for column, (family, chosen) in enumerate(families):
+        series = list(rows[chosen].groupby(["method", "degree"], sort=False))
+        dodge = np.linspace(-0.25, 0.25, len(series)) if len(series) > 1 else [0.0]
+        for row, (key, ylabel) in enumerate(metrics):
+            ax = axes[row][column]
+            for shift, ((method, degree), group) in zip(dodge, series):
+                base = method.removesuffix(LEVEL)
+                color, marker = styles[base, degree]
+                data = group["data"].iloc[0]
+                label = method_label(base, degree) + ("" if data == "raw" else f" ({data})")
+                if base == "gm":
+                    ax.axhline(group[key].iloc[0], ls="--", color=color, label=label)
+                else:
+                    group = group.sort_values("order")
+                    ax.plot(group["order"] + shift, group[key], marker=marker, color=color,
+                            label=label, lw=1.2, ms=4.5)
+            ax.set_xticks(sorted(rows["order"].unique()))
+            ax.grid(True, which="both", alpha=0.3)
+            if column == 0:
+                ax.set_ylabel(ylabel)
+            if row == 0 and family:
+                ax.set_title(f"methods {family}", fontsize="medium")
+            if row == 1:
+                ax.set_xlabel("model order (maximum lag L)")
+        for row, (key, _) in enumerate(metrics):
+            values = rows[key].to_numpy(dtype=float)
+            values = values[np.isfinite(values) & (values > 0)]
+            if len(values) and values.max() > 10 * values.min():
+                axes[row][0].set_yscale("log")
+    legend_outside(fig)
     fig.suptitle(mathtext_units(f"Prediction error against model order, {protocol} protocol: "
                                 f"{title}"))
     return fig
+
+
+def _styles(rows: pd.DataFrame) -> dict[tuple[str, int], tuple[str, str]]:
+    """Give each method (FOS per degree) one colour and marker for every panel."""
+    order = ["fos", *(m for m in _ORDER if m != "fos")]  # FOS first: the blue, the circles
+    keys = sorted({(m.removesuffix(LEVEL), int(d)) for m, d in zip(rows["method"], rows["degree"])},
+                  key=lambda k: (order.index(k[0]), k[1]))
+    markers = "osD^vPX*"
+    return {k: (f"C{i % 10}", markers[i % len(markers)]) for i, k in enumerate(keys)}
 
 
 def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
