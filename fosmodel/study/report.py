@@ -17,9 +17,9 @@ from matplotlib.figure import Figure
 
 from ..io.figures import legend_outside
 from ..io.output import save_figure, write_tables, write_text
-from ..models.latex import mathtext_units
-from ..models.summary import markdown_table
 from ..noise.metrics import caption_note, metric_definitions, segment_text
+from ..typeset.latex import mathtext_units
+from ..typeset.markdown import markdown_table
 from .harness import LEVEL, StudyResult, method_label
 
 _ORDER = ["yw", "cov", "burg", "gm", "fos"]
