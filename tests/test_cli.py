@@ -111,7 +111,9 @@ def test_existing_output_survives_a_failed_run(record, tmp_path, capsys):
     assert code == 2 and model.read_text() == "previous"
 
 
-def test_demo_writes_outputs_and_says_where(tmp_path, capsys):  # the main job, end to end
+@pytest.mark.slow
+def test_demo_writes_outputs_and_says_where(tmp_path, capsys, figure_log):  # the main job
+    figures = figure_log()
     code, out, err = _run(["demo", "--out", tmp_path / "demo"], capsys)
     assert code == 0, err
     assert f"outputs written to {(tmp_path / 'demo').resolve()}" in out
@@ -132,6 +134,11 @@ def test_demo_writes_outputs_and_says_where(tmp_path, capsys):  # the main job, 
     assert (mpu / "study_ay" / "order_fair.png").exists()
     for axis in ("ax", "ay", "az", "gx", "gy", "gz"):
         assert (mpu / f"loop_{axis}" / "report.md").exists()
+    # every figure reads (tests/test_figures.py says what is checked; the loop's are left out)
+    checked = figures()
+    assert len(checked) == len(list((tmp_path / "demo").rglob("*.png")))
+    assert {path: problems for path, problems in checked.items()
+            if problems and "/loop_" not in path} == {}
 
 
 def test_console_script_is_installed(record, tmp_path):
