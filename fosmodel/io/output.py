@@ -25,8 +25,9 @@ from typing import TYPE_CHECKING
 
 from ..core.exceptions import InputError
 from ..core.files import atomic_write, remove_path, stale_temporaries, temporary_path, write_text
-from ..typeset.latex import latex_table, table_label
+from ..typeset.latex import table_label
 from ..typeset.markdown import markdown_table
+from ..typeset.tables import latex_table
 from .figures import log_problems, tidy
 
 if TYPE_CHECKING:

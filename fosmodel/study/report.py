@@ -38,10 +38,16 @@ def _headers(result: StudyResult) -> dict[str, str]:
 
 
 def study_table(result: StudyResult, frame: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Every scored configuration (or the rows of ``frame``), with readable headers."""
+    """Every scored configuration (or the rows of ``frame``), with readable headers.
+
+    The columns that name a configuration come first (protocol, method, data, order, CP), so
+    that a table split across pages repeats them.
+    """
     frame = result.rows if frame is None else frame
-    cols = {"protocol": "Protocol", "degree": "CP", "evaluate_mse": "Evaluate MSE",
-            **_headers(result)}
+    headers = _headers(result)
+    names = {k: headers.pop(k) for k in ("label", "data", "order")}
+    cols = {"protocol": "Protocol", **names, "degree": "CP",
+            "evaluate_mse": f"Evaluate MSE ({result.config.units})^2", **headers}
     return frame[list(cols)].rename(columns=cols)
 
 
