@@ -16,8 +16,9 @@ def test_the_allan_analysis_imports_neither_the_harness_nor_the_ar_estimators(mo
 
 
 #: What a command's start must not load: the libraries of the commands themselves.
-COMMANDS_LIBRARIES = ("sklearn", "statsmodels", "matplotlib", "scipy", "allantools", "dask",
-                      "data_synth.scenarios", "fosmodel.models.model", "fosmodel.cli.commands")
+COMMANDS_LIBRARIES = ("sklearn", "statsmodels", "matplotlib", "scipy", "pandas", "allantools",
+                      "dask", "data_synth.scenarios", "fosmodel.models.model",
+                      "fosmodel.cli.commands")
 
 
 @pytest.mark.parametrize("argv", [["--version"], ["--help"], ["study", "--help"],
