@@ -34,8 +34,9 @@ def _run(args, capsys):
     return code, out, err
 
 
-def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys):
+def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys, figure_log):
     path, rec = imu_csv
+    figures = figure_log()
     out, js = tmp_path / "report", tmp_path / "imu.json"
     code, stdout, err = _run(["imu", path, "--columns", "gx_dps,ax_mps2", "--split", "60s,60s",
                               *FAST, "--out", out, "--json", js], capsys)
@@ -61,6 +62,11 @@ def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys):
     for column in ("gx_dps", "ax_mps2"):
         assert (out / "models" / f"{column}.json").is_file()
         assert (out / "study" / column / "report.md").is_file()
+    # every figure of the report reads (tests/test_figures.py), the loop's left out
+    checked = figures()
+    assert len(checked) == len(list(out.rglob("*.png")))
+    assert {p: problems for p, problems in checked.items()
+            if problems and "/loop/" not in f"/{p}"} == {}
 
 
 def test_a_ros2_bag_is_read_with_its_units(imu_bag, tmp_path, capsys):

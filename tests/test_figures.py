@@ -208,3 +208,20 @@ def test_every_figure_of_a_study_reads(tmp_path, figure_log, capsys):
     assert sorted(path.rsplit("/", 2)[-1] for path in checked) == ["order_fair.png",
                                                                    "order_paper.png"]
     assert {path: problems for path, problems in checked.items() if problems} == {}
+
+
+def test_every_figure_of_the_allan_commands_reads(tmp_path, figure_log, capsys):
+    """``allan --column`` and ``allan --columns``: each axis's figure and each sensor's."""
+    from fosmodel.cli import main
+
+    log = figure_log()
+    csv = tmp_path / "rec.csv"
+    assert main(["synth", "static_imu", "--duration", "600", "--seed", "2", "--out",
+                 str(csv)]) == 0
+    assert main(["allan", str(csv), "--column", "gz_dps", "--out", str(tmp_path / "one")]) == 0
+    assert main(["allan", str(csv), "--columns", "gx_dps,gy_dps,gz_dps,ax_mps2,ay_mps2,az_mps2",
+                 "--out", str(tmp_path / "six")]) == 0
+    capsys.readouterr()
+    checked = log()
+    assert len(checked) == 1 + 2 + 6
+    assert {path: problems for path, problems in checked.items() if problems} == {}

@@ -29,6 +29,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..typeset.tables import text_width
+
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
     from matplotlib.axes import Axes
@@ -39,6 +41,9 @@ if TYPE_CHECKING:
 
 #: The most series one panel shows (its legend's entries): beyond, facet or highlight.
 MAX_SERIES = 6
+#: A legend's "small" font against the 10 pt of :func:`fosmodel.typeset.tables.text_width`,
+#: and a legend entry's key and padding (pt).
+_SMALL, _LEGEND_KEY = 0.95, 45.0
 #: A report's temporary folder (:func:`fosmodel.io.output.report_directory`) and its name.
 _TEMPORARY = re.compile(r"^\.(.+)\.\d+\.[0-9a-f]{12}\.tmpdir$")
 #: A log axis spanning fewer decades is labelled at 1, 2 and 5 times the powers of ten.
@@ -75,10 +80,10 @@ def _bracket(ax: Axes, axis: Axis, name: str) -> None:
     """Widen an autoscaled axis to the labelled ticks just beyond its curves' data."""
     autoscaled = ax.get_autoscalex_on() if name == "x" else ax.get_autoscaley_on()
     low, high = sorted(_limits(ax, name))
-    values = [v for line in _data_lines(ax, name) for v in _values(line, name)]
-    if not autoscaled or not values:
+    # what the autoscaling saw (curves drawn with scalex/scaley False, as asymptotes, are not)
+    first, last = sorted(ax.dataLim.intervalx if name == "x" else ax.dataLim.intervaly)
+    if not autoscaled or not (np.isfinite(first) and np.isfinite(last)) or first == last:
         return  # set by hand, or nothing drawn
-    first, last = min(values), max(values)
     ticks = [t for t in axis.get_major_locator().tick_values(low, high)
              if np.isfinite(t) and (t > 0 or axis.get_scale() != "log")]
     below = max((t for t in ticks if t <= first), default=low)
@@ -147,9 +152,11 @@ def legend_outside(fig: Figure, axes: Sequence[Axes] | None = None) -> None:
         handles, labels = ax.get_legend_handles_labels()
         for handle, label in zip(handles, labels):
             seen.setdefault(label, handle)
-    if seen:
+    if seen:  # as many columns as the figure's width holds the longest label in
+        longest = max(text_width(str(label)) for label in seen) * _SMALL
+        columns = int(fig.get_figwidth() * 72 // (longest + _LEGEND_KEY))
         fig.legend(list(seen.values()), list(seen), loc="outside lower center",
-                   ncols=min(len(seen), 4), fontsize="small")
+                   ncols=max(1, min(len(seen), 4, columns)), fontsize="small")
 
 
 def figure_problems(fig: Figure) -> list[str]:
@@ -221,11 +228,15 @@ def _any_data(ax: Axes, name: str) -> bool:
 
 
 def _legend_problems(fig: Figure) -> list[str]:
-    """Name each legend whose box holds a point of a curve of a panel it lies over."""
+    """Name each legend cut by the figure's edge, or whose box holds a point of a curve."""
     legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes)]
     out = []
+    edge = fig.bbox
     for legend in (legend for legend in legends if legend is not None):
         box = legend.get_window_extent()
+        if box.x0 < edge.x0 - 1 or box.x1 > edge.x1 + 1 or box.y0 < edge.y0 - 1 \
+                or box.y1 > edge.y1 + 1:
+            out.append("a legend reaches beyond the figure's edge")
         for ax in fig.axes:
             clip = ax.get_window_extent()
             for line in ax.get_lines():
