@@ -9,7 +9,9 @@ here, :mod:`fosmodel.workflows.fleet`: a cluster, not one machine's processes.)
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
-from typing import Any
+from typing import Any, TypeVar
+
+Result = TypeVar("Result")
 
 
 def in_workers(calls: Iterable[tuple[Callable[..., Any], tuple]], n_jobs: int,
@@ -30,7 +32,7 @@ def in_workers(calls: Iterable[tuple[Callable[..., Any], tuple]], n_jobs: int,
     yield from run(delayed(_in_kept_worker)(function, args) for function, args in calls)
 
 
-def _in_kept_worker(function: Callable[..., Any], args: tuple) -> Any:
+def _in_kept_worker(function: Callable[..., Result], args: tuple) -> Result:
     """Call ``function(*args)`` in a worker that loky will not retire for its memory.
 
     loky measures a worker's memory after its first call and retires the worker once it
