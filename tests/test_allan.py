@@ -172,6 +172,7 @@ def test_white_noise_slope_and_classic_readoff(seed):
     assert lo <= density <= hi
 
 
+@pytest.mark.slow
 def test_standard_errors_are_calibrated():
     """Over 40 white-noise records the z-scores of N^2 have unit spread.
 
@@ -209,6 +210,7 @@ def test_rate_random_walk_recovered(seed):
     assert result.alpha[0] == 0 and result.alpha[-1] == -2
 
 
+@pytest.mark.slow
 def test_seed_004_gyro_arw_and_rrw_recovered():
     """Seed 004 eq. 5.4: ARW 0.068 deg/sqrt(s), RRW 0.00029 deg/sqrt(s^3) at 102.4 Hz.
 

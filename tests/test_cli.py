@@ -141,6 +141,7 @@ def test_demo_writes_outputs_and_says_where(tmp_path, capsys, figure_log):  # th
             if problems and "/loop_" not in path} == {}
 
 
+@pytest.mark.slow
 def test_console_script_is_installed(record, tmp_path):
     script = shutil.which("fosmodel") or str(Path(sysconfig.get_path("scripts")) / "fosmodel")
     proc = subprocess.run([script, "fit", str(record), "--column", "nope",
@@ -158,6 +159,7 @@ def long_record(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_study_writes_report_and_json(long_record, tmp_path, capsys):
     out, js = tmp_path / "study", tmp_path / "rows.json"
     code, stdout, err = _run(["study", long_record, "--column", "accel_y", "--sensor", "accel",
@@ -209,6 +211,7 @@ def test_study_empty_file_exit_2(tmp_path, capsys):
     assert code == 2 and "the file is empty" in err
 
 
+@pytest.mark.slow
 def test_close_loop_finds_an_undeclared_temperature_effect(tmp_path, capsys):
     rec = tmp_path / "rec.csv"
     assert cli.main(["synth", "undeclared_temperature", "--seed", "0", "--out", str(rec)]) == 0
@@ -352,6 +355,7 @@ def _multi_study(paths, out, *extra):
             "--starts", "5", "--out", out, *extra]
 
 
+@pytest.mark.slow
 def test_study_of_many_files_and_columns(tmp_path, capsys):
     out, js = tmp_path / "out", tmp_path / "rows.json"
     code, stdout, err = _run(_multi_study(_imu_files(tmp_path), out, "--json", js), capsys)
@@ -614,6 +618,7 @@ def test_a_single_units_and_sensor_still_apply_to_every_column(tmp_path, capsys)
             for r in json.loads(js.read_text())["records"]] == [("gyro", "deg/h")] * 2
 
 
+@pytest.mark.slow
 def test_study_split_in_percent_is_the_split_in_seconds(long_record, tmp_path, capsys):
     rows = []
     for split in ("50%,25%", "450s,225s", "7.5min,3.75min"):
@@ -639,6 +644,7 @@ def test_close_loop_split_in_seconds_resolves_to_fractions_of_the_record(record,
                           "short for the split 0.666667 / 0.166667: ")
 
 
+@pytest.mark.slow
 def test_allan_takes_units_per_column_beside_the_names(tmp_path, capsys):
     path = _mixed_imu(tmp_path)
     out, js = tmp_path / "noise", tmp_path / "noise.json"
@@ -661,7 +667,7 @@ def test_allan_takes_units_per_column_beside_the_names(tmp_path, capsys):
 def test_close_loop_reads_the_units_in_a_column_s_name(tmp_path, capsys):
     rng = np.random.default_rng(2)
     path = tmp_path / "gz.csv"
-    gz = lfilter([1.0], [1.0, -0.9], rng.standard_normal(30_000)) * 0.01 + 0.3
+    gz = lfilter([1.0], [1.0, -0.9], rng.standard_normal(20_000)) * 0.01 + 0.3
     pd.DataFrame({"gz_dps": gz}).to_csv(path, index=False)
     code, out, err = _run(["close-loop", path, "--column", "gz_dps", "--rate", "100", "--out",
                            tmp_path / "loop"], capsys)
@@ -672,6 +678,7 @@ def test_close_loop_reads_the_units_in_a_column_s_name(tmp_path, capsys):
     assert lines[2].split()[-2] != "-"  # the outage error of the starting model, in metres
 
 
+@pytest.mark.slow
 def test_close_loop_on_a_readable_header_takes_any_channel_as_input(readable_csv, tmp_path,
                                                                    capsys):
     """A channel ``Accel Y (g)`` enters the model with its lags and its square; the saved

@@ -73,6 +73,7 @@ def test_the_rows_are_the_six_axis_workflow_on_the_record(here, files):
             assert list(rows[column]) == list(table[column]), column
 
 
+@pytest.mark.slow
 def test_two_dask_workers_give_the_same_summary(here, files, tmp_path):
     from fosmodel.study.distributed import local_client
 
@@ -174,6 +175,7 @@ def test_a_split_too_long_for_a_record_is_refused_by_name(files, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_the_full_report_of_a_record_has_every_axis_timed(files, tmp_path):
     result = run_fleet(files[:1], tmp_path, FleetConfig(imu=SMALL, split=CONFIG.split,
                                                         columns=("gx_dps", "ax_mps2"),
@@ -188,6 +190,7 @@ def test_the_full_report_of_a_record_has_every_axis_timed(files, tmp_path):
     assert list(result.table["axis"]) == ["gx_dps", "ax_mps2"]
 
 
+@pytest.mark.slow
 def test_the_command_on_a_running_scheduler_gives_the_in_process_summary(files, tmp_path):
     from distributed import get_task_stream
 

@@ -176,6 +176,7 @@ def test_without_the_px4_extra(tmp_path, monkeypatch):
 
 
 @needs_logs
+@pytest.mark.slow
 def test_the_command_line_on_a_log(tmp_path, capsys):
     out = tmp_path / "allan"
     argv = ["allan", str(SAMPLE), "--topic", "sensor_combined", "--columns", ",".join(COLUMNS),

@@ -34,6 +34,7 @@ def result(record):
                    config=ImuConfig(**SMALL, n_jobs=1))
 
 
+@pytest.mark.slow
 def test_every_axis_goes_through_every_step(result, record):
     columns = list(record.columns)
     assert [a.axis.column for a in result.axes] == columns
@@ -50,6 +51,7 @@ def test_every_axis_goes_through_every_step(result, record):
             / study["baseline outage error (m, 30 s)"]).all()
 
 
+@pytest.mark.slow
 def test_the_rows_are_the_steps_run_alone(result, record):
     """A row of the tables is what the study and the loop of that axis give by themselves."""
     from fosmodel.loop.closeloop import close_loop
@@ -79,12 +81,14 @@ def pair(record):
     return here, two, lines
 
 
+@pytest.mark.slow
 def test_two_workers_give_the_same_tables(pair):
     here, two, _ = pair
     pd.testing.assert_frame_equal(two.study_table(), here.study_table())
     pd.testing.assert_frame_equal(two.loop_table(), here.loop_table())
 
 
+@pytest.mark.slow
 def test_progress_names_each_step_of_each_axis(pair):
     lines = pair[2]
     assert lines[0].startswith("allan: 2 axes in ")
@@ -93,6 +97,7 @@ def test_progress_names_each_step_of_each_axis(pair):
     assert lines[-1].endswith("4/4 tasks done")
 
 
+@pytest.mark.slow
 def test_the_report_holds_every_axis_the_exports_and_the_models(pair, record, tmp_path):
     result = pair[1]  # written by two workers
     paths = write_imu_report(result, tmp_path, "static imu")
@@ -121,6 +126,7 @@ def test_the_report_holds_every_axis_the_exports_and_the_models(pair, record, tm
                                                                  ("md", "csv", "tex")}
 
 
+@pytest.mark.slow
 def test_the_filter_model_is_the_axes_allan_models_side_by_side(result):
     from fosmodel.filter.allan_statespace import allan_state_space
 
@@ -186,6 +192,7 @@ def _with_methods(result, methods):
     return replace(result, config=config, axes=axes)
 
 
+@pytest.mark.slow
 def test_the_study_of_a_subset_of_methods_is_its_rows_of_the_study_of_all(every_method, record):
     from fosmodel.study.runner import run_study
 
@@ -198,6 +205,7 @@ def test_the_study_of_a_subset_of_methods_is_its_rows_of_the_study_of_all(every_
 
 
 @pytest.mark.parametrize("methods", SUBSETS, ids=",".join)
+@pytest.mark.slow
 def test_every_subset_of_methods_gives_the_tables_and_the_console(every_method, methods,
                                                                   tmp_path):
     result = _with_methods(every_method, methods)
@@ -252,6 +260,7 @@ def test_a_segment_too_short_for_its_windows_is_told_whatever_the_length():
         config.check(6_000, 100.0, resolve_axes(["gx_dps"]))
 
 
+@pytest.mark.slow
 def test_the_loop_scores_on_the_study_s_prediction_segment_unless_given_its_own(result):
     """One split by default: an axis's study and loop errors are on one prediction segment."""
     for a in result.axes:
