@@ -8,7 +8,7 @@ import pytest
 from matplotlib.figure import Figure
 from scipy.signal import lfilter
 
-from fosmodel.io.figures import figure_problems, plain_labels, tidy
+from fosmodel.io.figures import figure_problems, fit_title, plain_labels, tidy
 from fosmodel.io.output import FIGURE_DPI, save_figure
 from fosmodel.loop.closeloop import LoopConfig, close_loop
 from fosmodel.loop.loop_report import residual_figure
@@ -174,6 +174,22 @@ def test_the_checks_find_what_a_reader_cannot_read():
     assert "panel 1 (untitled): 12 series, more than 6" in problems
     assert any(p.startswith("the legend covers m") for p in problems)
     assert "panel 2 (untitled): outage reaches beyond the labelled y ticks (12..18)" in problems
+
+
+def test_a_title_cut_by_the_edge_is_found_and_a_long_one_goes_on_two_lines(tmp_path):
+    """The paper figure of the demo's accelerometer: seven inches wide, its one-line title
+    reached past both edges."""
+    fig = Figure(figsize=(7.0, 3.0), layout="constrained")
+    fig.subplots().plot([1, 2, 3], [1.0, 2.0, 3.0])
+    head, tail = ("Prediction error against model order, paper protocol",
+                  "accelerometer (paper_accel_y, seed 2013)")
+    fig.suptitle(f"{head}: {tail}")
+    assert f"'{head}: {tail}' reaches beyond the figure's edge" in _drawn(fig)
+    fit_title(fig, head, tail)
+    assert fig.get_suptitle() == f"{head}:\n{tail}"
+    assert not [p for p in _drawn(fig) if "edge" in p]
+    fit_title(fig, head, "gx")  # a short one stays on one line
+    assert fig.get_suptitle() == f"{head}: gx"
 
 
 def test_tidy_labels_apart_and_brackets_the_curves():

@@ -12,10 +12,12 @@ calls :func:`tidy`:
 
 :func:`figure_problems` checks a drawn figure for what a reader cannot read: tick labels that
 repeat, a curve outside the labels' range or outside its axes, a legend over the data, more
-series in a panel than a reader can tell apart.  ``save_figure`` runs it on every figure when
-the environment variable ``FOSMODEL_FIGURE_LOG`` names a file, and appends a line per figure
-to that file (the tests read it, also from the worker processes that draw a report's figures).
-:func:`legend_outside` puts one legend for a whole figure beside its panels.
+series in a panel than a reader can tell apart, a title or label cut by the figure's edge.
+``save_figure`` runs it on every figure when the environment variable ``FOSMODEL_FIGURE_LOG``
+names a file, and appends a line per figure to that file (the tests read it, also from the
+worker processes that draw a report's figures).
+:func:`legend_outside` puts one legend for a whole figure beside its panels; :func:`fit_title`
+puts a long title on two lines rather than past the figure's edges.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
     from matplotlib.ticker import Formatter
+    from matplotlib.transforms import BboxBase
 
 #: The most series one panel shows (its legend's entries): beyond, facet or highlight.
 MAX_SERIES = 6
@@ -141,6 +144,16 @@ def _plain(value: float, digits: int) -> str:
                                       trim="-")
 
 
+def fit_title(fig: Figure, head: str, tail: str) -> None:
+    """Title ``fig`` ``head: tail``, on two lines where one would be wider than the figure.
+
+    A narrow figure of a record with a long name: ``tail`` goes under ``head``.
+    """
+    title = fig.suptitle(f"{head}: {tail}")
+    if title.get_window_extent().width > fig.bbox.width:
+        title.set_text(f"{head}:\n{tail}")
+
+
 def legend_outside(fig: Figure, axes: Sequence[Axes] | None = None) -> None:
     """Put one legend of the labelled series of ``axes`` (default: all) below the panels.
 
@@ -165,7 +178,8 @@ def figure_problems(fig: Figure) -> list[str]:
     Checked per panel (axes with something drawn): its tick labels in view are distinct; each
     curve has points in view and they lie within half a tick interval of the labelled
     range; a panel shows at most :data:`MAX_SERIES` labelled series; no legend covers a
-    point of a curve.  Call it after the figure is drawn (saved).
+    point of a curve; no title, axis label or legend reaches beyond the figure's edge.  Call
+    it after the figure is drawn (saved).
     """
     problems = []
     for i, ax in enumerate(fig.axes):
@@ -178,7 +192,7 @@ def figure_problems(fig: Figure) -> list[str]:
         if len(labelled) > MAX_SERIES:
             problems.append(f"{where}: {len(labelled)} series, more than {MAX_SERIES}")
     problems += _legend_problems(fig)
-    return problems
+    return problems + _text_problems(fig)
 
 
 def _labelled_ticks(ax: Axes, axis: Axis, name: str) -> tuple[list[float], list[str]]:
@@ -231,11 +245,9 @@ def _legend_problems(fig: Figure) -> list[str]:
     """Name each legend cut by the figure's edge, or whose box holds a point of a curve."""
     legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes)]
     out = []
-    edge = fig.bbox
     for legend in (legend for legend in legends if legend is not None):
         box = legend.get_window_extent()
-        if box.x0 < edge.x0 - 1 or box.x1 > edge.x1 + 1 or box.y0 < edge.y0 - 1 \
-                or box.y1 > edge.y1 + 1:
+        if _beyond(box, fig.bbox):
             out.append("a legend reaches beyond the figure's edge")
         for ax in fig.axes:
             clip = ax.get_window_extent()
@@ -248,6 +260,24 @@ def _legend_problems(fig: Figure) -> list[str]:
                     out.append(f"the legend covers {_name(line)} in panel "
                                f"{fig.axes.index(ax) + 1}")
     return sorted(set(out))
+
+
+def _text_problems(fig: Figure) -> list[str]:
+    """Name each title and axis label that the figure's edge cuts."""
+    # a text keeps the renderer that last drew it: after a save at 300 dpi its extent would be
+    # in that save's pixels, the figure's box in its own
+    fig.draw_without_rendering()
+    texts = [*fig.texts, *(t for ax in fig.axes if ax.axison
+                           for t in (ax.title, ax.xaxis.label, ax.yaxis.label))]
+    return [f"'{text.get_text()}' reaches beyond the figure's edge" for text in texts
+            if text.get_visible() and text.get_text().strip()
+            and _beyond(text.get_window_extent(), fig.bbox)]
+
+
+def _beyond(box: BboxBase, edge: BboxBase) -> bool:
+    """Whether ``box`` reaches more than a pixel past ``edge``."""
+    return box.x0 < edge.x0 - 1 or box.x1 > edge.x1 + 1 or box.y0 < edge.y0 - 1 \
+        or box.y1 > edge.y1 + 1
 
 
 def _shown(line: Line2D) -> np.ndarray:

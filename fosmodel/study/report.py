@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from ..io.figures import legend_outside
+from ..io.figures import fit_title, legend_outside
 from ..io.output import save_figure, write_tables, write_text
 from ..noise.metrics import caption_note, metric_definitions, segment_text
 from ..typeset.latex import mathtext_units
@@ -122,7 +122,8 @@ def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
     axes = fig.subplots(2, len(families), squeeze=False, sharex=True, sharey="row")
     metrics = (("mse", mathtext_units(f"one-step prediction MSE ({cfg.units})^2")),
                ("outage_position_error_m",
-                f"position error after a {cfg.horizon_s:g} s outage (m)"))
+                # two lines: one would run into the MSE label of the panel above
+                f"position error after\na {cfg.horizon_s:g} s outage (m)"))
     for column, (family, chosen) in enumerate(families):
         series = list(rows[chosen].groupby(["method", "degree"], sort=False))
         dodge = np.linspace(-0.25, 0.25, len(series)) if len(series) > 1 else [0.0]
@@ -153,8 +154,8 @@ def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
             if len(values) and values.max() > 10 * values.min():
                 axes[row][0].set_yscale("log")
     legend_outside(fig)
-    fig.suptitle(mathtext_units(f"Prediction error against model order, {protocol} protocol: "
-                                f"{title}"))
+    fit_title(fig, f"Prediction error against model order, {protocol} protocol",
+              mathtext_units(title))
     return fig
 
 
