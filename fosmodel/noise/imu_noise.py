@@ -252,7 +252,7 @@ class ImuNoise:
                  "Allan floor 0.664 B), RandomWalk = K;",
                  "% one value per axis in the order given, or the largest over the axes when a "
                  "sensor has not exactly three. Upper limits (terms not resolved) are marked.",
-                 "% A bounded bias (Gauss-Markov) has no imuSensor parameter; the datasheet "
+                 "% A bounded bias (Gauss-Markov) has no parameter of its own here; the datasheet "
                  "convention's bias instability, the fitted curve's minimum / 0.664, is given "
                  "beside each sensor."]
         made = []
