@@ -210,12 +210,17 @@ def allan_row(name: str, axis: str, res, fit) -> dict:
     band = (res.taus >= 0.1) & (res.taus <= 1000)
     ratio = fit.model_adev(res.taus[band]) / res.adev[band]
     read = fit.readoff
+    i = int(np.argmin(res.adev))
+    minimum = fit.bias_stability()[0]
+    inside = bool(res.lower[i] <= minimum <= res.upper[i])
     return {"Record": name, "Axis": axis, **fit.conventions(),
             "line (Hz)": f"{res.line_hz:.3g}" if res.line_hz else "-",
             "fit/data min, 0.1-1000 s": ratio.min(), "fit/data max": ratio.max(),
             "misses": len(fit.misses()),
-            "B/read-off": (fit.coefficients["B"] / read["B"] if fit.resolved["B"]
-                           and np.isfinite(read["B"]) else np.nan)}
+            "fit min / min": (minimum / read["min_adev"] if np.isfinite(read["min_adev"])
+                              else np.nan),
+            "fit min in min's 68 %": ("yes" if inside else "no")
+            if np.isfinite(read["min_adev"]) else "-"}
 
 
 def allan_tasks(recs) -> list[Task]:
@@ -243,17 +248,24 @@ def allan_lines(allan: pd.DataFrame) -> list[str]:
     outside = adis[(low < 0.7) | (high > 1.4)]
     names = ", ".join(f"{r.Record.split()[-1]} {r.Axis} ({low[i]:.3f}-{high[i]:.3f})"
                       for i, r in outside.iterrows())
-    b_ratio = adis["B/read-off"].dropna()
-    b_off = b_ratio[(b_ratio < 1 / 1.5) | (b_ratio > 1.5)]
-    b_names = ", ".join(f"{adis.loc[i, 'Record'].split()[-1]} {adis.loc[i, 'Axis']} "
-                        f"({v:.2f})" for i, v in b_off.items())
+    stability = adis["fit min / min"].dropna()
+    off = stability[(stability - 1).abs() > 0.1]
+    inside = adis["fit min in min's 68 %"] == "yes"
+    off_names = ", ".join(f"{adis.loc[i, 'Record'].split()[-1]} {adis.loc[i, 'Axis']} ({v:.2f}, "
+                          f"{'inside' if inside[i] else 'outside'} the measured minimum's 68 % "
+                          "interval)" for i, v in off.items())
+    with_gm = adis[adis["GM fitted (sigma, Tc)"] != "-"]
+    gm_names = ", ".join(f"{r.Record.split()[-1]} {r.Axis}" for _, r in with_gm.iterrows())
     return [f"- ADIS16405, fitted curve within 0.7-1.4 times the measured deviation over "
             f"0.1-1000 s on {len(adis) - len(outside)} of {len(adis)} axes"
             + (f"; outside: {names}." if names else "."),
-            f"- Fitted B within 1.5 times the read-off min(ADEV)/0.664 on "
-            f"{len(b_ratio) - len(b_off)} of the {len(b_ratio)} ADIS16405 axes whose minimum "
-            f"lies inside the curve (B/read-off {b_ratio.min():.2f}-{b_ratio.max():.2f})"
-            + (f"; outside: {b_names}." if b_names else "."),
+            f"- A bounded bias (Gauss-Markov term) fitted beside the IEEE Std 952 terms on "
+            f"{len(with_gm)} of the {len(adis)} axes" + (f": {gm_names}." if gm_names else "."),
+            f"- In-run bias stability read on the fit (the fitted curve's minimum) within 10 % "
+            f"of the measured minimum on {len(stability) - len(off)} of the {len(stability)} "
+            f"ADIS16405 axes whose minimum lies inside the curve (fit/measured "
+            f"{stability.min():.2f}-{stability.max():.2f})"
+            + (f"; outside: {off_names}." if off_names else "."),
             *[f"- {d}" for d in DATASHEET]]
 
 

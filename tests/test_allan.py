@@ -416,6 +416,11 @@ def test_cli_writes_figure_tables_and_json(tmp_path, capsys):
     assert data["column"] == "gyro_y" and data["allan"]["rate_hz"] == pytest.approx(102.4)
     adev = pd.read_csv(out_dir / "allan.csv")
     assert len(adev) == len(data["allan"]["taus_s"]) and "edf" in adev.columns
+    # the fitted curve at every measured tau, and the datasheet's number the measured minimum
+    assert len(data["noise"]["fit_adev"]) == len(data["allan"]["taus_s"])
+    sheet = data["noise"]["datasheet"]
+    if sheet["in_run_bias_stability"] is not None:
+        assert sheet["in_run_bias_stability"] == min(data["allan"]["adev"])
 
 
 def test_cli_without_units_uses_record_units(tmp_path, capsys):

@@ -132,10 +132,19 @@ def test_simulation_has_the_model_allan_deviation_and_gives_back_the_terms():
     # ... but one GM is not the flat floor: the model's curve is up to 11 % below the fitted
     # one (around 2 s and 100 s), which pulls a refit of every term down by as much.
     assert np.all((theory / ieee > 0.885) & (theory / ieee <= 1.0))
-    refit = fit_noise(adev, ("N", "B", "K"))
+    refit = fit_noise(adev, ("N", "B", "K"), gauss_markov=False)  # the IEEE terms alone
     for term, value in {"N": N, "B": B, "K": K}.items():
         assert refit.resolved[term]
         assert refit.coefficients[term] == pytest.approx(value, rel=0.1)
+    # By default the fit finds the Gauss-Markov bias the model carries for B, and its terms.
+    found = fit_noise(adev, ("N", "B", "K"))
+    gm = system.state_names.index("gauss-markov bias")
+    phi, q = system.Phi[gm, gm], system.Q[gm, gm]
+    assert "G" in found.terms and found.gauss_markov["delta_chi2"] > found.gauss_markov["penalty"]
+    assert found.coefficients["G"] == pytest.approx(math.sqrt(q / (1 - phi**2)), rel=0.15)
+    assert found.gm_tc == pytest.approx(-1.0 / (RATE * math.log(phi)), rel=0.3)
+    assert found.coefficients["N"] == pytest.approx(N, rel=0.05)
+    assert found.coefficients["K"] == pytest.approx(K, rel=0.1)
 
 
 def test_six_axes_are_block_diagonal_with_each_axis_q():
@@ -227,3 +236,21 @@ def test_six_axis_filter_measuring_every_axis_is_consistent():
     run = run_filter(kf, np.array(z))
     normalised = (run.x - np.array(states)) ** 2 / run.variance
     assert np.mean(normalised) == pytest.approx(1.0, abs=0.15)
+
+
+def test_a_fitted_bounded_bias_is_its_own_gauss_markov_state():
+    """A fit with the Gauss-Markov term G: its sigma and Tc become a "bounded bias" state
+    after the random walk, and the model's Allan deviation is the fit's."""
+    ones = np.ones(len(TAUS))
+    result = AllanResult(taus=TAUS, adev=ones, lower=ones, upper=ones, counts=ones, edf=ones,
+                         alpha=0 * ones, rate=RATE, n_samples=10**6, units="m/s^2")
+    terms = {"N": N, "K": K, "G": 0.01}
+    fit = NoiseFit(result=result, terms=tuple(terms), coefficients=terms,
+                   squared_stderr=dict.fromkeys(terms, 0.0), resolved=dict.fromkeys(terms, True),
+                   gm_tc=40.0)
+    system = allan_state_space(fit)
+    assert system.state_names == ("white", "random-walk bias", "bounded bias")
+    phi = math.exp(-1.0 / (RATE * 40.0))
+    assert system.Phi[2, 2] == pytest.approx(phi)
+    assert system.Q[2, 2] == pytest.approx(0.01**2 * (1 - phi**2))
+    np.testing.assert_allclose(model_adev(system, TAUS, RATE), fit.model_adev(TAUS), rtol=1e-9)

@@ -65,17 +65,35 @@ def test_the_units_given_tell_the_sensor_whatever_the_name():
 
 
 def test_which_wins_inline_then_per_column_then_every_then_per_sensor_then_the_name():
-    given = UnitsSpec.parse("m/s^2,gy_dps=rad/s")
-    axes = resolve_axes(["gx:gyro:deg/h", "gy_dps", "ax_g", "gz"], {"gyro": "deg/s"},
-                        given=given)
+    given = UnitsSpec.parse("m/s^2,gy=rad/s")
+    axes = resolve_axes(["gx:gyro:deg/h", "gy", "ax", "gz"], {"gyro": "deg/s"}, given=given)
     assert _told(axes) == [("gx", "gyro", "deg/h", "given"),
-                           ("gy_dps", "gyro", "rad/s", "units given"),
-                           ("ax_g", "accel", "m/s^2", "units given"),
+                           ("gy", "gyro", "rad/s", "units given"),
+                           ("ax", "accel", "m/s^2", "units given"),
                            ("gz", "accel", "m/s^2", "units given")]
-    axes = resolve_axes(["gz", "ax_g", "gx_dps"], {"gyro": "rad/s"})
+    axes = resolve_axes(["gz", "ax_g", "gx_rads"], {"gyro": "rad/s"})
     assert _told(axes) == [("gz", "gyro", "rad/s", "gyro from the name, units given"),
                            ("ax_g", "accel", "g", "from the name"),
-                           ("gx_dps", "gyro", "rad/s", "gyro from the name, units given")]
+                           ("gx_rads", "gyro", "rad/s", "gyro from the name, units given")]
+
+
+@pytest.mark.parametrize(("columns", "units", "given"), [
+    (["gx_dps"], None, "gx_dps=rad/s"),  # per column
+    (["gx_dps", "gy_dps"], None, "rad/s"),  # for every column
+    (["gx_dps:gyro:rad/s"], None, None),  # inline
+    (["gx_dps"], {"gyro": "rad/s"}, None),  # per sensor
+])
+def test_units_given_against_the_units_a_name_spells_are_refused(columns, units, given):
+    with pytest.raises(InputError) as err:
+        resolve_axes(columns, units, given=UnitsSpec.parse(given) if given else None)
+    assert str(err.value) == ("column 'gx_dps': its name says deg/s, but the units given for it "
+                              "are rad/s; correct the units or rename the column")
+
+
+def test_units_given_that_agree_with_the_name_pass():
+    axes = resolve_axes(["gx_dps", "az_g"], given=UnitsSpec.parse("gx_dps=deg/s,az_g=g"))
+    assert _told(axes) == [("gx_dps", "gyro", "deg/s", "units given"),
+                           ("az_g", "accel", "g", "units given")]
 
 
 def test_units_the_file_declares_come_after_those_given():

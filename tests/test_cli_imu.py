@@ -40,7 +40,7 @@ def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys, figure
     figures = figure_log()
     out, js = tmp_path / "report", tmp_path / "imu.json"
     code, stdout, err = _run(["imu", path, "--columns", "gx_dps,ax_mps2", "--split", "60s,60s",
-                              *FAST, "--out", out, "--json", js], capsys)
+                              *FAST, "--inflate", "2", "--out", out, "--json", js], capsys)
     assert code == 0, err
     *table, written = stdout.splitlines()  # the last line names the output directory
     assert all(len(line) <= 100 for line in table)
@@ -56,6 +56,8 @@ def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys, figure
                                      evaluate_s=60.0, n_jobs=1))
     data = json.loads(js.read_text())
     assert data["aux"] == ["temp_c"]
+    assert data["noise"]["exports"]["inflate"] == 2.0
+    assert "inflated 2x" in (out / "noise" / "px4_ekf2.params").read_text()
     pd.testing.assert_frame_equal(pd.DataFrame(data["study"]), alone.study_table(),
                                   check_dtype=False)
     pd.testing.assert_frame_equal(pd.DataFrame(data["loop"]), alone.loop_table(),

@@ -126,6 +126,21 @@ def _units(tmp, *units):
             str(tmp / "report")]
 
 
+def _turned(tmp):
+    """A minute of gx at rest with a turn at 30 deg/s for 2 s from 20 s on."""
+    t = np.arange(6000) / 100.0
+    gx = 0.05 * np.random.default_rng(2).standard_normal(len(t)) + 30.0 * ((t >= 20) & (t < 22))
+    return _write(tmp, "time,gx\n" + "".join(f"{v:.2f},{g:.5f}\n" for v, g in zip(t, gx)))
+
+
+def _gravity_in_g(tmp):
+    """Ten seconds of an accelerometer triad at rest, in g."""
+    rng = np.random.default_rng(3)
+    rows = [f"{k / 100:.2f},{a:.5f},{b:.5f},{1 + c:.5f}" for k, (a, b, c) in
+            enumerate(2e-3 * rng.standard_normal((1000, 3)))]
+    return _write(tmp, "\n".join(["time,ax,ay,az", *rows]) + "\n")
+
+
 BUILDERS = {
     "missing file": lambda tmp: ["fit", str(tmp / "none.csv"), "--column", "gx", "--out",
                                  str(tmp / "m.json")],
@@ -203,6 +218,14 @@ BUILDERS = {
         str(tmp / "store")],
     "unknown step of a fleet": lambda tmp: ["fleet", _write(tmp, _record()), "--steps",
                                             "allan,fit", "--out", str(tmp / "store")],
+    "a record that moves (`allan`, `imu`, `fleet`)":
+        lambda tmp: _report("allan", tmp, _turned(tmp), "--units", "deg/s"),
+    "units given against the units a column's name spells":
+        lambda tmp: ["allan", _write(tmp, _record().replace("gx", "gx_dps")), "--columns",
+                     "gx_dps", "--units", "gx_dps=rad/s", "--out", str(tmp / "report")],
+    "accelerometers whose mean contradicts gravity in the units given":
+        lambda tmp: ["allan", _gravity_in_g(tmp), "--columns", "ax,ay,az", "--units", "m/s^2",
+                     "--out", str(tmp / "report")],
 }
 
 # Problems whose input is one of conftest's record files: (the fixture that writes it, a

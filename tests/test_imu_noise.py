@@ -61,10 +61,10 @@ def test_the_sensor_and_units_a_name_tells(name, told):
 
 
 def test_axes_given_inferred_and_refused():
-    axes = resolve_axes(["gx_dps", "gy", "ax:accel:m/s^2", "acc_z"], {"gyro": "rad/s",
-                                                                       "accel": "mg"})
+    axes = resolve_axes(["gx_rads", "gy", "ax:accel:m/s^2", "acc_z"], {"gyro": "rad/s",
+                                                                        "accel": "mg"})
     assert [(a.column, a.sensor, a.units) for a in axes] == [
-        ("gx_dps", "gyro", "rad/s"), ("gy", "gyro", "rad/s"), ("ax", "accel", "m/s^2"),
+        ("gx_rads", "gyro", "rad/s"), ("gy", "gyro", "rad/s"), ("ax", "accel", "m/s^2"),
         ("acc_z", "accel", "mg")]
     assert axes[2].told == "given" and axes[1].told == "gyro from the name, units given"
     cases = {

@@ -124,3 +124,19 @@ def add_loader_options(parser: argparse.ArgumentParser, contiguous: str | None =
                              "interpolated onto the IMU samples (default: a bag's only "
                              "sensor_msgs/msg/Temperature topic)")
     parser.set_defaults(gaps="contiguous" if contiguous else "refuse")
+
+
+def inflation(text: str) -> float:
+    """Read an inflation factor: a finite number of at least 1."""
+    value = positive_float(text)
+    if value < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a factor of at least 1 (a moving platform is "
+                                         f"noisier than a static one), got {text!r}")
+    return value
+
+
+INFLATE_HELP = ("multiply every exported noise value (Kalibr, OpenVINS, VINS, ORB-SLAM3, PX4, "
+                "ArduPilot, MATLAB) by K for a moving platform, and say so in each file; 1 "
+                "keeps the static record's values")
+STATIC_ONLY_HELP = ("analyse the longest static stretch of a record that moves (by default a "
+                    "record that moves is refused: an Allan analysis needs the sensor at rest)")

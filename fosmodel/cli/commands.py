@@ -31,19 +31,37 @@ from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
-          columns: list[str] | None = None) -> Record:
+          columns: list[str] | None = None, notes: bool = True) -> Record:
     """Load the record of ``path`` (default ``args.file``) with the loader options.
 
     Only ``columns`` (default: all) are read and checked.  Its notes go to
-    stderr, after the file's name when ``path`` is given.
+    stderr, after the file's name when ``path`` is given, unless not ``notes``
+    (:func:`_checked` says them after its checks).
     """
     rec = load_record(path or args.file, columns=columns, rate=args.rate,
                       scale=parse_scales(args.scale or []), uniform=args.uniform,
                       outliers=args.outliers, gaps=args.gaps, topic=args.topic,
                       temperature_topic=args.temperature_topic)
-    for note in rec.notes:
-        print(f"fosmodel: note: {path + ': ' if path else ''}{note}", file=sys.stderr)
+    if notes:
+        for note in rec.notes:
+            print(f"fosmodel: note: {path + ': ' if path else ''}{note}", file=sys.stderr)
     return rec
+
+
+def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
+    """Check the record's units and stillness (:func:`~fosmodel.noise.checks.check_record`).
+
+    Return it, or its longest static stretch with ``--static-only``; then say the loader's
+    notes (a refused record gets its one line and nothing else), after the stretch kept.
+    """
+    from ..noise.checks import check_record
+
+    kept, stretch = check_record(rec, axes, args.static_only)
+    if stretch:
+        print(f"fosmodel: note: {stretch}", file=sys.stderr)
+    for note in rec.notes:
+        print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{note}", file=sys.stderr)
+    return kept
 
 
 def _axes(args: argparse.Namespace, columns: list[str], rec: Record,
@@ -240,12 +258,16 @@ def allan(args: argparse.Namespace) -> int:
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     if args.columns:
         return _allan_axes(args, out, json_path)
+    if args.inflate != 1.0:
+        raise InputError("--inflate scales the exports of --columns (Kalibr, OpenVINS, VINS, "
+                         "ORB-SLAM3, PX4, ArduPilot); one --column has none")
     from ..noise.allan import allan_deviation
     from ..noise.allan_fit import fit_noise
     from ..noise.allan_report import write_allan
 
-    rec = _load(args, columns=[args.column])
+    rec = _load(args, columns=[args.column], notes=False)
     axis = _axes(args, [args.column], rec, optional=True)
+    rec = _checked(args, rec, axis)
     result = allan_deviation(rec.column(args.column), rec.require_rate(),
                              units=axis[0].units if axis else None,
                              sensor=axis[0].sensor if axis else None)
@@ -269,16 +291,21 @@ def allan(args: argparse.Namespace) -> int:
 
 
 def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> int:
+    from ..filter.joint_noise import joint_noise
     from ..noise.imu_noise import imu_noise, write_imu_noise
 
-    rec = _load(args, columns=[spec.partition(":")[0] for spec in args.columns])
+    rec = _load(args, columns=[spec.partition(":")[0] for spec in args.columns], notes=False)
     axes = _axes(args, args.columns, rec)
+    rec = _checked(args, rec, axes)
     for axis in axes:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
-    noise = imu_noise({a.column: rec.column(a.column) for a in axes}, axes, rec.require_rate(),
-                      rec.source, min_tau=args.min_tau)
+    columns = {a.column: rec.column(a.column) for a in axes}
+    noise = imu_noise(columns, axes, rec.require_rate(), rec.source, min_tau=args.min_tau)
+    joint = joint_noise(columns, noise) if len(axes) > 1 else None
     with report_directory(out, [args.file]) as tmp:
-        write_imu_noise(noise, tmp, args.title or Path(args.file).name)
+        write_imu_noise(noise, tmp, args.title or Path(args.file).name, inflate=args.inflate)
+        if joint is not None:
+            write_text(tmp / "joint_model.json", json.dumps(joint.to_dict(), indent=1) + "\n")
     print(noise.summary())
     for a in noise.axes:
         if a.fit.misses():
@@ -286,7 +313,7 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
                   "deviation beyond its 95 % interval; see its figure's lower panel",
                   file=sys.stderr)
     if json_path:
-        write_text(json_path, json.dumps(noise.to_dict(), indent=1) + "\n")
+        write_text(json_path, json.dumps(noise.to_dict(args.inflate), indent=1) + "\n")
     print(f"Allan noise report of {len(axes)} axes written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else ""))
     return 0

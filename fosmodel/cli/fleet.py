@@ -61,7 +61,7 @@ def fleet(args: argparse.Namespace) -> int:
                          steps=tuple(args.steps), split=args.split, loop_split=args.loop_split,
                          columns=tuple(args.columns) if args.columns else None,
                          units=args.units, temperature=args.temperature, load=load,
-                         reports=args.reports)
+                         reports=args.reports, static_only=args.static_only)
     with dask_client(args.scheduler, args.workers, args.connect_timeout) as client:
         result = run_fleet(args.files, out, config, client=client,
                            progress=sys.stderr.isatty())

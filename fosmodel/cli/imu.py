@@ -15,10 +15,13 @@ from typing import Any
 from ..io.split import SplitSpec
 from ..noise.axes import UnitsSpec
 from .arguments import (
+    INFLATE_HELP,
     RECORD_HELP,
     SPLIT_HELP,
+    STATIC_ONLY_HELP,
     UNITS_HELP,
     add_loader_options,
+    inflation,
     int_list,
     name_list,
     positive_float,
@@ -74,13 +77,15 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--min-tau", type=positive_float,
                         help="shortest averaging time of the Allan fits, in s (default: found "
                              "per axis)")
+    parser.add_argument("--static-only", action="store_true", help=STATIC_ONLY_HELP)
+    parser.add_argument("--inflate", type=inflation, default="1", metavar="K", help=INFLATE_HELP)
 
 
 def workflow_settings(args: argparse.Namespace) -> dict[str, Any]:
     """Return the settings of :class:`~fosmodel.workflows.imu.ImuConfig` the options give."""
     return dict(orders=args.orders, degrees=args.degrees, methods=args.methods,
                 protocols=("paper", "fair") if args.protocol == "both" else (args.protocol,),
-                horizon_s=args.horizon, min_tau=args.min_tau)
+                horizon_s=args.horizon, min_tau=args.min_tau, inflate=args.inflate)
 
 
 def imu(args: argparse.Namespace) -> int:
@@ -94,15 +99,22 @@ def imu(args: argparse.Namespace) -> int:
     )
     from ..workflows.imu import ImuConfig, record_axes, run_imu
     from ..workflows.imu_report import console_summary, write_imu_report
-    from .commands import _load
+    from .commands import _checked, _load
 
     json_path = writable_file(args.json) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
-    rec = _load(args)  # every column: an IMU record has few, and its temperature is found
+    from ..noise.checks import unused_columns
+
+    rec = _load(args, notes=False)  # every column: an IMU record has few; its temperature too
     axes, aux = record_axes(rec, args.columns, args.units, args.temperature)
+    rec = _checked(args, rec, axes)
+    aux = {name: rec.column(name) for name in aux}  # the static stretch's, if one was kept
     for axis in axes:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
+    for column, why in unused_columns(rec.names, [*(a.column for a in axes), *aux],
+                                      named=bool(args.columns)):
+        print(f"fosmodel: note: column {column!r} skipped: {why}", file=sys.stderr)
     rate = rec.require_rate()
 
     def at(n: int) -> ImuConfig:  # the settings for a record of n samples

@@ -8,11 +8,14 @@ from .._version import __version__
 from ..io.split import SplitSpec
 from ..noise.axes import UnitsSpec
 from .arguments import (
+    INFLATE_HELP,
     RECORD_HELP,
     SPLIT_HELP,
+    STATIC_ONLY_HELP,
     UNITS_HELP,
     add_loader_options,
     exog_arg,
+    inflation,
     int_list,
     levels_arg,
     name_list,
@@ -156,6 +159,9 @@ def build_parser() -> argparse.ArgumentParser:
     allan.add_argument("--min-tau", type=positive_float,
                        help="shortest averaging time fitted, in s (default: found from the "
                             "curve, leaving out taus bent by the sensor's own filtering)")
+    allan.add_argument("--static-only", action="store_true", help=STATIC_ONLY_HELP)
+    allan.add_argument("--inflate", type=inflation, default="1", metavar="K",
+                       help=INFLATE_HELP + " (with --columns)")
     allan.add_argument("--title", help="title of the figure")
     allan.add_argument("--out", required=True, help="output directory (created)")
     allan.add_argument("--json", help="also write the Allan deviation and coefficients as JSON")

@@ -15,9 +15,11 @@ noise).  White noise of spectral density ``N^2`` sampled at ``rate`` has the var
 ``N^2 rate`` per sample and the Allan deviation ``N/sqrt(tau)``; the random walk has
 ``K sqrt(tau/3)``.  Flicker noise, whose Allan deviation is the floor ``0.664 B``, has no
 finite-order state space; the Gauss-Markov bias stands in for it where it matters most (see
-:func:`gauss_markov_for_flicker`).  :func:`assemble_axes` puts several axes (three gyros and
-three accelerometers) into one block-diagonal model, and :func:`initial_covariance` gives a
-filter its starting covariance: the random walk has no stationary one.
+:func:`gauss_markov_for_flicker`).  Where the fit holds a Gauss-Markov term ``G`` (a bounded
+bias, :func:`~fosmodel.noise.allan_fit.fit_noise`), it is one more state, with the fitted
+``sigma`` and ``Tc``, after the random walk.  :func:`assemble_axes` puts several axes (three
+gyros and three accelerometers) into one block-diagonal model, and :func:`initial_covariance`
+gives a filter its starting covariance: the random walk has no stationary one.
 
 References
 ----------
@@ -42,16 +44,17 @@ from scipy.linalg import block_diag
 
 from ..core.exceptions import InputError
 from ..noise.allan import FLICKER_FLOOR
-from ..noise.allan_fit import NoiseFit
+from ..noise.allan_fit import GM_PEAK_ADEV, GM_PEAK_TAU, NoiseFit, gauss_markov_avar
 from .statespace import StateSpace
 
-#: Averaging time of the Gauss-Markov Allan deviation's peak, in correlation times: the
-#: maximum of :func:`gauss_markov_adev` (1.89 Tc in the literature).
-GM_PEAK_TAU = 1.8926178
-#: That peak in units of the process's standard deviation (0.618 sigma in the literature).
-GM_PEAK_ADEV = 0.6173643
-#: The terms the model carries, in state order, and their states' names.
-STATE_NAMES = {"N": "white", "B": "gauss-markov bias", "K": "random-walk bias"}
+__all__ = ["GM_PEAK_ADEV", "GM_PEAK_TAU", "STATE_NAMES", "allan_state_space", "assemble_axes",
+           "flicker_tau", "gauss_markov_adev", "gauss_markov_for_flicker", "initial_covariance",
+           "model_adev", "model_terms"]
+
+#: The terms the model carries, in state order, and their states' names: the fitted
+#: Gauss-Markov term ``G`` (a bounded bias) is a state as it is.
+STATE_NAMES = {"N": "white", "B": "gauss-markov bias", "G": "bounded bias",
+               "K": "random-walk bias"}
 #: The fitted terms that get no state, and why.
 NOT_CARRIED = {
     "Q": "not carried: quantization is white in the integral, not in the rate",
@@ -99,9 +102,9 @@ def gauss_markov_adev(taus: ArrayLike, sigma: float, tc: float) -> np.ndarray:
     """Allan deviation of a first-order Gauss-Markov process (continuous time).
 
     ``sigma^2(tau) = (2 sigma^2 Tc / tau) (1 - Tc (3 - 4 exp(-tau/Tc) + exp(-2 tau/Tc)) /
-    (2 tau))``: rising as ``sqrt(tau)`` (a random walk) well below ``Tc``, falling as
-    ``1/sqrt(tau)`` (white noise) well above it, and peaking at :data:`GM_PEAK_ADEV`
-    ``sigma`` at ``tau =`` :data:`GM_PEAK_TAU` ``Tc``.
+    (2 tau))`` (:func:`fosmodel.noise.allan_fit.gauss_markov_avar`): rising as ``sqrt(tau)``
+    (a random walk) well below ``Tc``, falling as ``1/sqrt(tau)`` (white noise) well above it,
+    and peaking at :data:`GM_PEAK_ADEV` ``sigma`` at ``tau =`` :data:`GM_PEAK_TAU` ``Tc``.
 
     Parameters
     ----------
@@ -121,9 +124,7 @@ def gauss_markov_adev(taus: ArrayLike, sigma: float, tc: float) -> np.ndarray:
     ----------
     El-Sheimy, Hou and Niu (2008), eq. for the Gauss-Markov Allan variance (module references).
     """
-    x = np.asarray(taus, dtype=float) / tc
-    return sigma * np.sqrt(2.0 / x * (1.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x))
-                                      / (2.0 * x)))
+    return sigma * np.sqrt(gauss_markov_avar(taus, tc))
 
 
 def flicker_tau(n: float, k: float, taus: np.ndarray) -> float:
@@ -169,7 +170,9 @@ def allan_state_space(fit: NoiseFit, mu: float = 0.0) -> StateSpace:
     The terms' values come from :func:`model_terms` (fitted, or the upper limit where not
     resolved).  ``N`` gives the white state, ``B`` the Gauss-Markov bias of
     :func:`gauss_markov_for_flicker` placed at :func:`flicker_tau` of the ``N`` and ``K``
-    used, ``K`` the random-walk bias (module docstring).  A term the fit did not include
+    used, ``K`` the random-walk bias, and a fitted Gauss-Markov term ``G`` its own
+    Gauss-Markov state ("bounded bias", its ``sigma`` and ``Tc``) (module docstring).  A
+    term the fit did not include
     (``terms=`` of :func:`~fosmodel.noise.allan_fit.fit_noise`) has no state, and its name is
     missing from ``state_names``; quantization, the rate ramp and the sinusoid get none either
     (:data:`NOT_CARRIED`).
@@ -189,7 +192,7 @@ def allan_state_space(fit: NoiseFit, mu: float = 0.0) -> StateSpace:
     Raises
     ------
     InputError
-        The fit has none of ``N``, ``B`` and ``K``.
+        The fit has none of ``N``, ``B``, ``K`` and ``G``.
 
     References
     ----------
@@ -198,7 +201,7 @@ def allan_state_space(fit: NoiseFit, mu: float = 0.0) -> StateSpace:
     """
     values = {k: v.value for k, v in model_terms(fit).items() if k in STATE_NAMES}
     if not values:
-        raise InputError(f"the Allan fit has none of the terms N, B, K (it has "
+        raise InputError(f"the Allan fit has none of the terms N, B, K, G (it has "
                          f"{', '.join(fit.terms)}): there is no noise to model")
     dt = 1.0 / fit.result.rate
     phi, q = [], []
@@ -213,6 +216,9 @@ def allan_state_space(fit: NoiseFit, mu: float = 0.0) -> StateSpace:
     if "K" in values:
         phi.append(1.0)
         q.append(values["K"] ** 2 * dt)
+    if "G" in values and fit.gm_tc is not None:  # the fitted bounded bias, as it is
+        phi.append(math.exp(-dt / fit.gm_tc))
+        q.append(values["G"] ** 2 * (1.0 - phi[-1] ** 2))
     n = len(phi)
     return StateSpace(Phi=np.diag(phi), B=np.zeros((n, 0)), G=np.eye(n), H=np.ones((1, n)),
                       Q=np.diag(q), mu=float(mu),

@@ -22,6 +22,17 @@ their strong correlation between neighbouring taus, plus the misfit the
 model leaves (estimated from the residuals, Paule-Mandel); terms not
 resolved from zero are dropped and the rest refitted.
 
+A bias that is bounded makes the curve rise and fall again, which the five terms cannot do
+(their sum's log-log slope only grows with tau).  Beside them a first-order Gauss-Markov
+term ``G`` (a bias of standard deviation ``sigma`` and correlation time ``Tc``, Allan variance
+``sigma^2 g(tau/Tc)``, :func:`gauss_markov_avar`) is fitted where the record calls for it:
+``Tc`` is chosen by the same weighted log fit, and the term is kept when the likelihood ratio
+of the two fits (the generalised chi-square of the log deviation under the IEEE fit's
+covariance, both refitted by generalised least squares) drops by more than the Bayesian
+information criterion's penalty ``2 ln n`` for its two parameters (:func:`fit_noise`).  The
+bias instability is then reported as the datasheets read it, from the fitted curve: its
+minimum (the in-run bias stability) and that minimum / 0.664 (:meth:`NoiseFit.bias_stability`).
+
 Each term is defined here, at the top: its Allan variance (:func:`_basis`), its rate
 spectrum (:func:`_spectrum`, for the covariance of the estimates), its name and its
 navigation units.  :class:`NoiseFit` holds a fit's coefficients, errors, limits and
@@ -39,7 +50,7 @@ import allantools
 import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
-from scipy.optimize import brentq, least_squares, nnls
+from scipy.optimize import brentq, least_squares, minimize_scalar, nnls
 from scipy.special import digamma
 
 from ..core.exceptions import InputError
@@ -52,6 +63,17 @@ from .metrics import STANDARD_GRAVITY, to_si_scale
 TERMS = ("Q", "N", "B", "K", "R")
 #: With the sinusoid, fitted where the record has a spectral line.
 ALL_TERMS = (*TERMS, "S")
+#: The first-order Gauss-Markov (bounded bias) term, fitted where the record calls for it.
+GAUSS_MARKOV = "G"
+_ORDER = (*ALL_TERMS, GAUSS_MARKOV)
+#: Averaging time of a Gauss-Markov process's Allan deviation peak, in correlation times, and
+#: the peak in its standard deviations (1.89 Tc and 0.618 sigma in the literature).
+GM_PEAK_TAU = 1.8926178
+GM_PEAK_ADEV = 0.6173643
+#: A Gauss-Markov term is sought with its peak at least this many times the first fitted tau
+#: and the taus the sensor's filtering may bend (a bend there is the filter's, not a bias),
+#: and at most at the last tau.
+GM_PEAK_FROM_START = 10.0
 #: Relative misfit allowed to the IEEE Std 952 sum at each tau, beside the statistical scatter:
 #: real curves bend from the ideal terms by some tens of per cent (temperature cycles, a bias
 #: that is bounded), and no decade of the curve may be given up for another.
@@ -64,7 +86,8 @@ FILTER_SAMPLES = 10
 #: A fitted curve off the measured one by more than this factor, beyond the 95 % interval of
 #: the measured value, is reported as a miss.
 MISS_FACTOR = 1.25
-_NAMES = {"Q": "quantization", "B": "bias instability", "R": "rate ramp", "S": "sinusoid"}
+_NAMES = {"Q": "quantization", "B": "bias instability", "R": "rate ramp", "S": "sinusoid",
+          "G": "bounded bias (Gauss-Markov)"}
 _NAMES_BY_SENSOR = {
     "gyro": {"N": "angle random walk", "K": "rate random walk"},
     "accel": {"N": "velocity random walk", "K": "acceleration random walk"},
@@ -74,18 +97,51 @@ _NAMES_BY_SENSOR = {
 _NAV = {
     "gyro": {"Q": (1.0, "deg"), "N": (60.0, "deg/sqrt(h)"), "B": (3600.0, "deg/h"),
              "K": (3600.0 * 60.0, "deg/h/sqrt(h)"), "R": (3600.0**2, "deg/h^2"),
-             "S": (3600.0, "deg/h")},
+             "S": (3600.0, "deg/h"), "G": (3600.0, "deg/h")},
     "accel": {"Q": (1.0, "m/s"), "N": (60.0, "m/s/sqrt(h)"), "B": (1e3 / STANDARD_GRAVITY, "mg"),
               "K": (3600.0 * 60.0, "m/s/h/sqrt(h)"), "R": (3600.0**2, "m/s/h^2"),
-              "S": (1e3 / STANDARD_GRAVITY, "mg")},
+              "S": (1e3 / STANDARD_GRAVITY, "mg"), "G": (1e3 / STANDARD_GRAVITY, "mg")},
 }
 
 
-def _basis(taus: np.ndarray, terms: tuple[str, ...], line_hz: float | None = None) -> np.ndarray:
+def gauss_markov_avar(taus: ArrayLike, tc: float) -> np.ndarray:
+    """Allan variance of a first-order Gauss-Markov process of unit variance (continuous time).
+
+    ``2/x (1 - (3 - 4 exp(-x) + exp(-2x)) / (2x))`` with ``x = tau/Tc``: rising as ``2x/3``
+    (a random walk) well below ``Tc``, falling as ``2/x`` (white noise) well above it, and
+    peaking at ``GM_PEAK_ADEV^2`` at ``tau = GM_PEAK_TAU Tc``.  Below ``x = 1e-3`` its series
+    ``2x/3 - x^2/2 + 7x^3/30``, where the closed form loses its digits.
+
+    Parameters
+    ----------
+    taus : array-like
+        Averaging times in seconds.
+    tc : float
+        Correlation time in seconds.
+
+    Returns
+    -------
+    ndarray
+
+    References
+    ----------
+    N. El-Sheimy, H. Hou and X. Niu, "Analysis and modeling of inertial sensors using Allan
+    variance", *IEEE Trans. Instrum. Meas.* 57(1), 140-149, 2008.
+    """
+    x = np.asarray(taus, dtype=float) / tc
+    small = x < 1e-3
+    xs = np.where(small, 1.0, x)
+    closed = 2.0 / xs * (1.0 + (4.0 * np.expm1(-xs) - np.expm1(-2.0 * xs)) / (2.0 * xs))
+    return np.where(small, 2.0 * x / 3.0 - x**2 / 2.0 + 7.0 * x**3 / 30.0, closed)
+
+
+def _basis(taus: np.ndarray, terms: tuple[str, ...], line_hz: float | None = None,
+           gm_tc: float | None = None) -> np.ndarray:
     """Allan variance of each term per unit squared coefficient, one column per term.
 
     The sinusoid ``S`` (amplitude ``S`` at ``line_hz``) has IEEE Std 952's
-    ``(sin^2(pi f0 tau)/(pi f0 tau))^2``.
+    ``(sin^2(pi f0 tau)/(pi f0 tau))^2``; the Gauss-Markov ``G`` (standard deviation ``G``,
+    correlation time ``gm_tc``) :func:`gauss_markov_avar`.
     """
     t = np.asarray(taus, dtype=float)
 
@@ -94,21 +150,31 @@ def _basis(taus: np.ndarray, terms: tuple[str, ...], line_hz: float | None = Non
             raise ValueError("the sinusoid term S needs its frequency line_hz")
         return (np.sin(np.pi * line_hz * t) ** 2 / (np.pi * line_hz * t)) ** 2
 
+    def gauss_markov() -> np.ndarray:
+        if gm_tc is None:
+            raise ValueError("the Gauss-Markov term G needs its correlation time gm_tc")
+        return gauss_markov_avar(t, gm_tc)
+
     columns = {"Q": lambda: 3.0 / t**2, "N": lambda: 1.0 / t,
                "B": lambda: np.full_like(t, FLICKER_FLOOR**2), "K": lambda: t / 3.0,
-               "R": lambda: t**2 / 2.0, "S": sinusoid}
+               "R": lambda: t**2 / 2.0, "S": sinusoid, "G": gauss_markov}
     return np.column_stack([columns[k]() for k in terms])
 
 
-def _spectrum(f: np.ndarray, squared: dict[str, float], rate: float) -> np.ndarray:
+def _spectrum(f: np.ndarray, squared: dict[str, float], rate: float,
+              gm_tc: float | None = None) -> np.ndarray:
     """Two-sided rate spectrum of the fitted noise terms (the ramp and the line are left out).
 
     Quantization (white angle error of variance ``Q^2``) and the random walk
-    use their sampled forms; white and flicker noise ``N^2`` and ``B^2/(2 pi f)``.
+    use their sampled forms; white and flicker noise ``N^2`` and ``B^2/(2 pi f)``; the
+    Gauss-Markov ``2 G^2 Tc / (1 + (2 pi f Tc)^2)`` (``2 G^2 Tc`` is its white level, as
+    ``N^2`` is white noise's).
     """
     s2 = np.sin(np.pi * f / rate) ** 2
     shapes = {"Q": 4.0 * s2 * rate, "N": np.ones_like(f), "B": 1.0 / (2.0 * np.pi * f),
               "K": 1.0 / (4.0 * rate**2 * s2), "R": np.zeros_like(f), "S": np.zeros_like(f)}
+    if gm_tc is not None:
+        shapes["G"] = 2.0 * gm_tc / (1.0 + (2.0 * np.pi * f * gm_tc) ** 2)
     return sum((c * shapes[k] for k, c in squared.items()), np.zeros_like(f))
 
 
@@ -147,6 +213,11 @@ class NoiseFit:
     misfit : float
         Relative misfit of the model beyond the statistical scatter (0 when the
         model explains the curve within it), part of the standard errors.
+    gm_tc : float or None
+        Correlation time (s) of the Gauss-Markov term ``G`` when it is among ``terms``.
+    gauss_markov : dict
+        How the Gauss-Markov term was decided (:func:`fit_noise`): the criterion, the drop of
+        the generalised chi-square, the penalty, the correlation time tried and whether kept.
     """
 
     result: AllanResult
@@ -158,6 +229,8 @@ class NoiseFit:
     readoff: dict[str, float] = field(default_factory=dict)
     start: int = 0
     misfit: float = 0.0
+    gm_tc: float | None = None
+    gauss_markov: dict[str, Any] = field(default_factory=dict)
 
     @property
     def fitted_taus(self) -> np.ndarray:
@@ -214,14 +287,31 @@ class NoiseFit:
 
     def term_adev(self, term: str, taus: ArrayLike) -> np.ndarray:
         """Allan deviation of one fitted term at ``taus`` (seconds)."""
-        column = _basis(np.asarray(taus), (term,), self.result.line_hz)[:, 0]
+        column = _basis(np.asarray(taus), (term,), self.result.line_hz, self.gm_tc)[:, 0]
         return self.coefficients[term] * np.sqrt(column)
 
     def model_adev(self, taus: ArrayLike) -> np.ndarray:
         """Allan deviation of the fitted model (all terms) at ``taus``."""
         squared = np.array([self.coefficients[k] ** 2 for k in self.terms])
-        basis = _basis(np.asarray(taus, dtype=float), self.terms, self.result.line_hz)
+        basis = _basis(np.asarray(taus, dtype=float), self.terms, self.result.line_hz,
+                       self.gm_tc)
         return np.sqrt(basis @ squared)
+
+    def bias_stability(self) -> tuple[float, float]:
+        """Return the fitted curve's minimum and its averaging time, over the fitted taus.
+
+        The datasheets' in-run bias stability read on the fit (the measured minimum stays in
+        :attr:`readoff`); divided by 0.664 it is the bias instability by their convention.
+        """
+        grid = np.geomspace(self.fitted_taus[0], self.fitted_taus[-1], 2000)
+        curve = self.model_adev(grid)
+        i = int(np.argmin(curve))
+        return float(curve[i]), float(grid[i])
+
+    def fitted_terms(self) -> list[str]:
+        """Return the terms in the fitted curve (non-zero), ``G`` with its correlation time."""
+        return [k if k != GAUSS_MARKOV else f"G (Tc {self.gm_tc:.3g} s)"
+                for k in self.terms if self.coefficients[k] > 0]
 
     def dominant(self, tau: float) -> str:
         """Return the resolved term with the largest Allan variance at ``tau`` seconds.
@@ -235,7 +325,7 @@ class NoiseFit:
         """Units of a coefficient in the record's units."""
         u = self.result.units or "units"
         return {"Q": f"{u}*s", "N": f"{u}*sqrt(s)", "B": u, "K": f"{u}/sqrt(s)", "S": u,
-                "R": f"{u}/s"}[term]
+                "R": f"{u}/s", "G": u}[term]
 
     def navigation(self, term: str, value: float | None = None) -> tuple[float, str] | None:
         """Return a coefficient (or ``value`` of that term) in navigation units.
@@ -276,6 +366,8 @@ class NoiseFit:
                 ("Tau range fitted", f"{self.fitted_taus[0]:.4g}-{res.taus[-1]:.4g} s"),
                 ("Units", res.units or "not given"), ("Sensor", res.sensor or "not given"),
                 ("Terms fitted", ",".join(self.terms))]
+        if self.gm_tc is not None:
+            info.append(("Gauss-Markov Tc", f"{self.gm_tc:.4g} s"))
         return Summary("Allan variance noise coefficients (IEEE Std 952)", info,
                        self._table(), self._notes())
 
@@ -304,10 +396,9 @@ class NoiseFit:
 
     def _notes(self) -> list[str]:
         res = self.result
-        notes = ["sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi)B^2 + K^2 tau/3 + R^2 tau^2/2"
-                 + (" + S^2 (sin^2(pi f0 tau)/(pi f0 tau))^2" if "S" in self.terms else "")
-                 + ", fitted to ln ADEV with weights 1/(1/(2 edf) + "
-                 f"{MODEL_ALLOWANCE:g}^2) (statistical scatter plus a model allowance)."]
+        notes = [self._model_text() + ", fitted to ln ADEV with weights 1/(1/(2 edf) + "
+                 f"{MODEL_ALLOWANCE:g}^2) (statistical scatter plus a model allowance).",
+                 self._gauss_markov_text()]
         if self.start:
             notes.append(f"Averaging times below {self.fitted_taus[0]:.3g} s left out: the "
                          "record's own filtering bends the curve there.")
@@ -332,6 +423,11 @@ class NoiseFit:
             notes.append("Datasheet convention: in-run bias stability = the minimum of the "
                          f"Allan deviation, {self._both('B', self.readoff['min_adev'])} at "
                          f"tau = {self.readoff['min_tau_s']:.3g} s.")
+        minimum, at = self.bias_stability()
+        notes.append(f"On the fitted curve ({' + '.join(self.fitted_terms())}): in-run bias "
+                     f"stability (its minimum) {self._both('B', minimum)} at tau = {at:.3g} "
+                     f"s; bias instability (minimum / 0.664) "
+                     f"{self._both('B', minimum / FLICKER_FLOOR)}.")
         misses = self.misses()
         if misses:
             worst = max(misses, key=lambda m: abs(math.log(m[1])))
@@ -341,6 +437,24 @@ class NoiseFit:
                          "not describe the curve there.")
         return notes
 
+    def _model_text(self) -> str:
+        return ("sigma^2(tau) = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi)B^2 + K^2 tau/3 + R^2 tau^2/2"
+                + (" + S^2 (sin^2(pi f0 tau)/(pi f0 tau))^2" if "S" in self.terms else "")
+                + (" + G^2 g(tau/Tc)" if GAUSS_MARKOV in self.terms else ""))
+
+    def _gauss_markov_text(self) -> str:
+        """Say whether the Gauss-Markov term was fitted, and why."""
+        gm = self.gauss_markov
+        if "delta_chi2" not in gm:
+            return f"Gauss-Markov term G: {gm.get('reason', 'not sought')}."
+        why = (f"the generalised chi-square of ln ADEV drops by {gm['delta_chi2']:.3g} with it "
+               f"(Tc {gm['tc_s']:.3g} s), against BIC's penalty {gm['penalty']:.3g} (ln n for "
+               f"each of {gm['parameters_added']} parameters added)")
+        if GAUSS_MARKOV in self.terms:
+            return (f"Gauss-Markov term G (a bounded bias) fitted: sigma = "
+                    f"{self._both('G', self.coefficients['G'])}, Tc = {self.gm_tc:.3g} s; {why}.")
+        return f"Gauss-Markov term G not fitted: {why}."
+
     def conventions(self) -> dict[str, str]:
         """Return N, B and K fitted beside the classic read-offs, as text in navigation units.
 
@@ -349,6 +463,9 @@ class NoiseFit:
         """
         read = self.readoff
         minimum = read.get("min_adev", math.nan)
+        fit_min, fit_at = self.bias_stability()
+        gm = (f"{self._fitted_text('G')}, Tc {self.gm_tc:.3g} s" if GAUSS_MARKOV in self.terms
+              else "-")
         return {
             "N fitted": self._fitted_text("N"),
             "N read-off (1 s)": self._nav_text("N", read.get("N", math.nan)),
@@ -359,6 +476,11 @@ class NoiseFit:
                                             if math.isfinite(minimum) else "-"),
             "K fitted": self._fitted_text("K"),
             "K read-off (3 s)": self._nav_text("K", read.get("K", math.nan)),
+            "GM fitted (sigma, Tc)": gm,
+            "fit: in-run bias stability (min)": (f"{self._nav_text('B', fit_min)} at "
+                                                 f"{fit_at:.3g} s"),
+            "fit: B (min/0.664)": self._nav_text("B", fit_min / FLICKER_FLOOR),
+            "terms fitted": " ".join(k for k in self.terms if self.coefficients[k] > 0),
         }
 
     def _fitted_text(self, term: str) -> str:
@@ -381,10 +503,12 @@ class NoiseFit:
     def to_dict(self) -> dict[str, Any]:
         """JSON-serialisable coefficients, errors, intervals, units, read-offs (NaN/inf as null)."""
         nav = {k: self.navigation(k) for k in self.terms}
+        fit_min, fit_at = self.bias_stability()
         return {
-            "model": "sigma^2 = 3Q^2/tau^2 + N^2/tau + (2ln2/pi)B^2 + K^2tau/3 + R^2tau^2/2"
-                     + (" + S^2(sin^2(pi f0 tau)/(pi f0 tau))^2" if "S" in self.terms else ""),
+            "model": self._model_text(),
             "terms": list(self.terms),
+            "terms_fitted": [k for k in self.terms if self.coefficients[k] > 0],
+            "gm_tc_s": self.gm_tc, "gauss_markov": dict(self.gauss_markov),
             "coefficients": dict(self.coefficients),
             "stderr": {k: _finite(v) for k, v in self.stderr.items()},
             "squared_stderr": dict(self.squared_stderr),
@@ -396,7 +520,13 @@ class NoiseFit:
             "readoff": {k: _finite(v) for k, v in self.readoff.items()},
             "datasheet": {"in_run_bias_stability": _finite(self.readoff.get("min_adev",
                                                                             math.nan)),
-                          "tau_s": _finite(self.readoff.get("min_tau_s", math.nan))},
+                          "tau_s": _finite(self.readoff.get("min_tau_s", math.nan)),
+                          "fit_in_run_bias_stability": fit_min, "fit_tau_s": fit_at,
+                          "fit_bias_instability": fit_min / FLICKER_FLOOR,
+                          "convention": "in-run bias stability = the minimum of the Allan "
+                                        "deviation (measured, and of the fitted curve); bias "
+                                        "instability = that minimum / 0.664"},
+            "fit_adev": self.model_adev(self.result.taus).tolist(),
             "fitted_tau_s": [float(self.fitted_taus[0]), float(self.fitted_taus[-1])],
             "line_hz": self.result.line_hz, "misfit": self.misfit,
             "model_allowance": MODEL_ALLOWANCE,
@@ -410,7 +540,7 @@ def _finite(value: float) -> float | None:
 
 
 def fit_noise(result: AllanResult, terms: tuple[str, ...] = TERMS, *,
-              min_tau: float | None = None) -> NoiseFit:
+              min_tau: float | None = None, gauss_markov: bool | None = None) -> NoiseFit:
     """Fit the IEEE Std 952 noise coefficients to an Allan deviation.
 
     The squared coefficients minimise the weighted squared misfit of the
@@ -444,6 +574,21 @@ def fit_noise(result: AllanResult, terms: tuple[str, ...] = TERMS, *,
     a superfluous term that soaks up scatter pulls the others down, while
     one that shapes the curve stays in it.
 
+    Then the Gauss-Markov term ``G``: its correlation time ``Tc`` is the one whose fit with
+    the terms has the least weighted misfit (the same fit), its Allan peak (at
+    :data:`GM_PEAK_TAU` ``Tc``) between :data:`GM_PEAK_FROM_START` times the first fitted tau
+    (and the :data:`FILTER_SAMPLES` the sensor's filtering may bend) and the last tau.  The
+    model with ``G`` holds the terms the IEEE fit kept, ``G``, and any term that fit dropped
+    which the curve needs beside ``G`` (so the IEEE model is this one with ``G`` at zero).
+    Both models are refitted by generalised least squares on ln ADEV under the covariance
+    ``C`` of the IEEE fit (its statistical part and misfit), and ``G`` is kept when the
+    generalised chi-square drops by more than ``ln n`` per parameter added (``sigma`` and
+    ``Tc``, and a term brought back): the Bayesian information criterion for ``n`` fitted
+    taus.  On
+    records of white noise, flicker and random walk alone the drop stays below it (a bump of
+    one realisation is within the covariance), while a bounded bias's rise and fall exceeds
+    it many times.
+
     Parameters
     ----------
     result : AllanResult
@@ -453,6 +598,9 @@ def fit_noise(result: AllanResult, terms: tuple[str, ...] = TERMS, *,
         added by itself when the record has a spectral line).
     min_tau : float, optional
         Shortest averaging time to fit, in seconds.
+    gauss_markov : bool, optional
+        Fit the Gauss-Markov term always (True), never (False), or where the criterion keeps
+        it (None, the default).
 
     Returns
     -------
@@ -469,42 +617,154 @@ def fit_noise(result: AllanResult, terms: tuple[str, ...] = TERMS, *,
     IEEE Std 952-1997, Annex C (Allan variance, including the sinusoidal term).
     R. C. Paule and J. Mandel, "Consensus values and weighting factors",
     *J. Res. Natl. Bur. Stand.* 87(5), 1982.
+    G. Schwarz, "Estimating the dimension of a model", *Ann. Statist.* 6(2), 461-464, 1978.
     """
     terms = _check_terms(terms, len(result.taus), result.line_hz)
     start = _start(result, terms, min_tau)
-    kept, (fitted, misfit, resid, cov) = terms, _fit_terms(result, terms, start)
-    squared = {k: c for k, (c, _) in fitted.items()}
-    se = {k: v for k, (_, v) in fitted.items()}
-    while len(kept) > 1:
-        dropped = _drop_one(result, kept, start, squared, se, resid, cov)
-        if dropped is None:
-            break
-        weakest, (fitted, misfit, resid, cov) = dropped
-        kept = tuple(k for k in kept if k != weakest)
-        squared.update({k: c for k, (c, _) in fitted.items()}, **{weakest: 0.0})
-        se.update({k: v for k, (_, v) in fitted.items()})
+    kept, squared, se, misfit, cov = _fit_and_drop(result, terms, start)
+    gm_tc, choice = None, {"reason": "not sought (gauss_markov=False)"}
+    if gauss_markov is not False:
+        gm_tc, choice, with_gm = _gauss_markov(result, terms, start, kept, squared, cov,
+                                               gauss_markov is True)
+    if gm_tc is not None and choice["kept"]:
+        _, squared, se, misfit, _ = with_gm
+        terms = (*terms, GAUSS_MARKOV)
+    else:
+        gm_tc = None
     limits = {k: math.sqrt(squared[k] + 2.0 * se[k]) for k in terms
               if not squared[k] > 2.0 * se[k]}
     return NoiseFit(
         result=result, terms=terms,
         coefficients={k: math.sqrt(squared[k]) for k in terms},
         squared_stderr=se, resolved={k: k not in limits for k in terms}, limits=limits,
-        readoff=readoff(result), start=start, misfit=misfit,
+        readoff=readoff(result), start=start, misfit=misfit, gm_tc=gm_tc, gauss_markov=choice,
     )
 
 
+def _fit_and_drop(result: AllanResult, terms: tuple[str, ...], start: int,
+                  gm_tc: float | None = None) -> tuple[tuple[str, ...], dict, dict, float,
+                                                       np.ndarray]:
+    """Fit ``terms`` and drop, one at a time, the unresolved ones the curve does not need.
+
+    Return the terms kept, every term's squared coefficient (0 when dropped) and its standard
+    error, the misfit and the covariance of the last fit.  ``G`` is never dropped: the
+    criterion of :func:`_gauss_markov` kept it.
+    """
+    kept, (fitted, misfit, resid, cov) = terms, _fit_terms(result, terms, start, gm_tc)
+    squared = {k: c for k, (c, _) in fitted.items()}
+    se = {k: v for k, (_, v) in fitted.items()}
+    while len(kept) > 1:
+        dropped = _drop_one(result, kept, start, squared, se, resid, cov, gm_tc)
+        if dropped is None:
+            break
+        weakest, (fitted, misfit, resid, cov) = dropped
+        kept = tuple(k for k in kept if k != weakest)
+        squared.update({k: c for k, (c, _) in fitted.items()}, **{weakest: 0.0})
+        se.update({k: v for k, (_, v) in fitted.items()})
+    return kept, squared, se, misfit, cov
+
+
 def _drop_one(result: AllanResult, kept: tuple[str, ...], start: int, squared: dict,
-              se: dict, resid: np.ndarray, cov: np.ndarray) -> tuple[str, tuple] | None:
+              se: dict, resid: np.ndarray, cov: np.ndarray,
+              gm_tc: float | None = None) -> tuple[str, tuple] | None:
     """Find the weakest unresolved term whose removal leaves the curve as well fitted.
 
     Return it with the refit without it; None if every unresolved term shapes the curve.
     """
-    loose = [k for k in kept if not squared[k] > 2.0 * se[k]]
+    loose = [k for k in kept if not squared[k] > 2.0 * se[k] and k != GAUSS_MARKOV]
     for term in sorted(loose, key=lambda k: squared[k] / se[k] if se[k] > 0 else -math.inf):
-        trial = _fit_terms(result, tuple(k for k in kept if k != term), start)
+        trial = _fit_terms(result, tuple(k for k in kept if k != term), start, gm_tc)
         if _chi2(trial[2], cov) - _chi2(resid, cov) < CURVE_CHI2:
             return term, trial
     return None
+
+
+def _gauss_markov(result: AllanResult, terms: tuple[str, ...], start: int,
+                  kept: tuple[str, ...], squared: dict, cov: np.ndarray,
+                  force: bool = False) -> tuple[float | None, dict[str, Any], tuple]:
+    """Decide the Gauss-Markov term beside the IEEE terms (see :func:`fit_noise`).
+
+    ``kept``, ``squared`` and ``cov`` are the IEEE fit's.  Return the correlation time (None
+    when the fitted taus leave no room for its peak), what was decided and why, and the fit
+    with the term (:func:`_fit_and_drop` of ``terms`` and ``G``).
+    """
+    taus = result.taus[start:]
+    first = max(float(taus[0]), FILTER_SAMPLES / result.rate)
+    lo, hi = GM_PEAK_FROM_START * first / GM_PEAK_TAU, taus[-1] / GM_PEAK_TAU
+    if lo >= hi or len(taus) < len(terms) + 4:
+        return None, {"reason": f"not sought: the fitted taus ({taus[0]:.3g}-{taus[-1]:.3g} s) "
+                                "leave no room for its peak"}, ()
+    tc = _gauss_markov_tc(result, terms, start, lo, hi)
+    with_gm = _with_gauss_markov(result, terms, start, kept, tc)
+    adev = _unbiased(result.adev[start:], result.edf[start:])
+    whiten = _whitener(cov)
+    without = _gls_chi2(_basis(taus, kept, result.line_hz), adev, whiten,
+                        np.array([squared[k] for k in kept]))
+    gm_kept, gm_squared = with_gm[0], with_gm[1]
+    delta = without - _gls_chi2(_basis(taus, gm_kept, result.line_hz, tc), adev, whiten,
+                                np.array([gm_squared[k] for k in gm_kept]))
+    added = len(gm_kept) + 1 - len(kept)  # G's sigma and Tc, and any term it brings back
+    penalty = added * math.log(len(taus))
+    return tc, {"criterion": "BIC: generalised chi-square of ln ADEV (the IEEE fit's covariance, "
+                             "both models refitted by GLS) against ln n per parameter added",
+                "delta_chi2": delta, "penalty": penalty, "parameters_added": added,
+                "n_taus": len(taus), "tc_s": tc, "tc_range_s": [lo, hi],
+                "kept": bool(force or delta > penalty), "forced": force}, with_gm
+
+
+def _with_gauss_markov(result: AllanResult, terms: tuple[str, ...], start: int,
+                       kept: tuple[str, ...], tc: float) -> tuple:
+    """Fit the IEEE fit's terms, ``G`` and any dropped term the curve needs with ``G``.
+
+    The terms the IEEE fit kept stay (so that the models are nested, the IEEE one the model
+    with ``G`` at zero); a term it dropped comes back when the fit of every term and ``G``
+    keeps it (:func:`_fit_and_drop`).  Return as :func:`_fit_and_drop` does.
+    """
+    back = _fit_and_drop(result, (*terms, GAUSS_MARKOV), start, tc)
+    model = tuple(k for k in (*terms, GAUSS_MARKOV) if k in kept or k in back[0])
+    fitted, misfit, _, cov = _fit_terms(result, model, start, tc)
+    squared = {k: 0.0 for k in back[1]} | {k: c for k, (c, _) in fitted.items()}
+    se = dict(back[2]) | {k: v for k, (_, v) in fitted.items()}
+    return model, squared, se, misfit, cov
+
+
+def _gauss_markov_tc(result: AllanResult, terms: tuple[str, ...], start: int, lo: float,
+                     hi: float) -> float:
+    """Return the correlation time whose weighted log fit with ``terms`` misfits least.
+
+    A grid of 12 per decade between ``lo`` and ``hi``, then a bounded scalar search around
+    its best point.
+    """
+    def misfit(log_tc: float) -> float:
+        resid = _curve_fit(result, (*terms, GAUSS_MARKOV), start, 10.0**log_tc)[2]
+        return float(np.mean(_weights(result.edf[start:]) * resid**2))
+
+    grid = np.linspace(math.log10(lo), math.log10(hi),
+                       max(int(12 * math.log10(hi / lo)) + 1, 3))
+    best = int(np.argmin([misfit(g) for g in grid]))
+    found = minimize_scalar(misfit, bounds=(grid[max(best - 1, 0)],
+                                            grid[min(best + 1, len(grid) - 1)]),
+                            method="bounded", options={"xatol": 1e-3})
+    return float(10.0 ** found.x)
+
+
+def _whitener(cov: np.ndarray) -> np.ndarray:
+    """Return ``C^-1/2``: eigenvalues below 1e-12 of the largest (and a 1e-9 ridge) clipped."""
+    ridge = 1e-9 * float(np.mean(np.diag(cov))) * np.eye(len(cov))
+    values, vectors = np.linalg.eigh(cov + ridge)
+    return (vectors / np.sqrt(np.maximum(values, 1e-12 * values.max()))) @ vectors.T
+
+
+def _gls_chi2(basis: np.ndarray, adev: np.ndarray, whiten: np.ndarray,
+              start: np.ndarray) -> float:
+    """Return the least generalised chi-square of ln ``adev`` over non-negative squares."""
+    tiny = np.finfo(float).tiny
+    scale = np.median(adev[:, None] ** 2 / np.maximum(basis, tiny), axis=0)
+    design = basis * scale
+    fitted = least_squares(lambda x: whiten @ _log_residual(design, x, adev),
+                           np.maximum(start / scale, 1e-8), bounds=(0.0, np.inf),
+                           x_scale="jac", xtol=1e-12, ftol=1e-12)
+    return float(fitted.fun @ fitted.fun)
 
 
 def _check_terms(terms: tuple[str, ...], n_taus: int, line_hz: float | None) -> tuple[str, ...]:
@@ -579,29 +839,30 @@ def _log_fit(basis: np.ndarray, adev: np.ndarray, edf: np.ndarray) -> np.ndarray
     return fitted.x * scale
 
 
-def _curve_fit(result: AllanResult, terms: tuple[str, ...],
-               start: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _curve_fit(result: AllanResult, terms: tuple[str, ...], start: int,
+               gm_tc: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return the basis from ``start`` on, the squared coefficients fitted there, residuals.
 
     The coefficients are fitted to the bias-corrected ln ADEV.
     """
-    basis = _basis(result.taus[start:], terms, result.line_hz)
+    basis = _basis(result.taus[start:], terms, result.line_hz, gm_tc)
     adev = _unbiased(result.adev[start:], result.edf[start:])
     squared = _log_fit(basis, adev, result.edf[start:])
     return basis, squared, _log_residual(basis, squared, adev)
 
 
-def _fit_terms(result: AllanResult, terms: tuple[str, ...],
-               start: int) -> tuple[dict[str, tuple[float, float]], float, np.ndarray, np.ndarray]:
+def _fit_terms(result: AllanResult, terms: tuple[str, ...], start: int,
+               gm_tc: float | None = None
+               ) -> tuple[dict[str, tuple[float, float]], float, np.ndarray, np.ndarray]:
     """Return ``{term: (squared coefficient, its standard error)}`` of one fit, and more.
 
     Also the misfit, the residuals of ln ADEV and their covariance.
     """
     fitted, edf = slice(start, None), result.edf[start:]
-    basis, squared, resid = _curve_fit(result, terms, start)
+    basis, squared, resid = _curve_fit(result, terms, start, gm_tc)
     variance = 0.5 / edf
     misfit = _paule_mandel(resid, variance, int(np.count_nonzero(squared)))
-    rho = _correlation(result, dict(zip(terms, squared)))[fitted, fitted]
+    rho = _correlation(result, dict(zip(terms, squared)), gm_tc)[fitted, fitted]
     cov = np.sqrt(np.outer(variance, variance)) * rho + misfit**2 * np.eye(len(edf))
     root_w = np.sqrt(_weights(edf))
     jacobian = 0.5 * basis / np.maximum(basis @ squared, np.finfo(float).tiny)[:, None]
@@ -648,7 +909,8 @@ def _squared_stderr(x: np.ndarray, cov: np.ndarray, active: np.ndarray) -> np.nd
     return out
 
 
-def _correlation(result: AllanResult, squared: dict[str, float]) -> np.ndarray:
+def _correlation(result: AllanResult, squared: dict[str, float],
+                 gm_tc: float | None = None) -> np.ndarray:
     """Correlation of the overlapping Allan variance estimates at ``result.taus``.
 
     For a Gaussian process of spectrum ``S`` the estimates at taus i and j,
@@ -668,7 +930,7 @@ def _correlation(result: AllanResult, squared: dict[str, float]) -> np.ndarray:
     u = [np.pi * f[:, None] * taus for f in (edges[:-1], edges[1:], mid)]
     gain = 2.0 * _cell_mean(_sin4_integral, 4, *u) / (m**2 * s2)
     gain2 = 4.0 * _cell_mean(_sin8_integral, 8, *u) / (m**4 * s2**2)
-    weight = _spectrum(mid, squared, result.rate) ** 2 * np.diff(edges)
+    weight = _spectrum(mid, squared, result.rate, gm_tc) ** 2 * np.diff(edges)
     cov = (gain * weight[:, None]).T @ gain
     np.fill_diagonal(cov, weight @ gain2)
     sd = np.sqrt(np.diag(cov))

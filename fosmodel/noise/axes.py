@@ -8,7 +8,9 @@ bag's, a ULog's) say everything; a column without them is read from its name
 ``angular_velocity.x`` are gyros, ``ax``, ``acc_x``, ``linear_acceleration.x``
 accelerometers, and a suffix ``_dps``, ``_rads``, ``_g``, ``_mg``, ``_mps2``
 gives the units.  :func:`resolve_axes` puts these together, with a sensor or
-units per sensor given for every column.
+units per sensor given for every column, and refuses units given for a column whose name
+says others (``gx_dps=rad/s``): one of the two is wrong, and a factor of 57 in the noise
+would follow either way.
 """
 
 from __future__ import annotations
@@ -206,10 +208,10 @@ def _resolve(spec: str, units: Mapping[str, str], given: UnitsSpec, declared: Ma
             raise InputError(f"expected COLUMN or COLUMN:SENSOR:UNITS (e.g. gx:gyro:deg/s), "
                              f"got {spec!r}")
         to_si_scale(inline[0], inline[1])  # refuses unknown sensors and units, listing them
-        return _checked(Axis(column, inline[0], inline[1], "given"), sensor)
+        return _agrees(_checked(Axis(column, inline[0], inline[1], "given"), sensor))
     told = given.of(column)
     if told is not None:
-        return _checked(Axis(column, sensor_of(told), told, "units given"), sensor)
+        return _agrees(_checked(Axis(column, sensor_of(told), told, "units given"), sensor))
     if column in declared:
         told = declared[column]
         return _checked(Axis(column, sensor_of(told), told, "units from the file"), sensor)
@@ -225,7 +227,7 @@ def _resolve(spec: str, units: Mapping[str, str], given: UnitsSpec, declared: Ma
     if kind in units:
         to_si_scale(kind, units[kind])
         how = "given" if sensor else f"{kind} from the name, units given"
-        return Axis(column, kind, units[kind], how)
+        return _agrees(Axis(column, kind, units[kind], how))
     if named_units is None:
         by = "" if sensor else " by its name"
         raise InputError(f"column {column!r}: {_NAMED[kind]}{by}, but the name does not tell "
@@ -239,4 +241,13 @@ def _checked(axis: Axis, sensor: str | None) -> Axis:
     if sensor is not None and axis.sensor != sensor:
         raise InputError(f"column {axis.column!r}: {axis.units} is a unit of "
                          f"{_NAMED[axis.sensor]}, not of {_NAMED[sensor]}")
+    return axis
+
+
+def _agrees(axis: Axis) -> Axis:
+    """``axis``, unless its name spells units (``gx_dps``) other than those given for it."""
+    named = infer_axis(axis.column)[1]
+    if named is not None and named != axis.units:
+        raise InputError(f"column {axis.column!r}: its name says {named}, but the units given "
+                         f"for it are {axis.units}; correct the units or rename the column")
     return axis

@@ -20,6 +20,10 @@ people paste into a filter or a VIO configuration:
   coefficient, as MathWorks' Allan variance example reads it: the floor
   divided by 0.664), ``RandomWalk`` = K, per axis.
 - A plain JSON of the same per axis (:meth:`ImuNoise.to_dict`).
+- OpenVINS, VINS-Mono/VINS-Fusion, ORB-SLAM3, PX4 EKF2 and ArduPilot EKF3, each converted
+  as its own code discretises the noise (:mod:`fosmodel.noise.exports`).
+
+Every export may be inflated for a moving platform (``inflate``), and says by how much.
 
 A one-number field (Kalibr has one value per sensor) takes the *largest*
 value over the sensor's axes: a filter tuned below an axis's noise
@@ -60,10 +64,11 @@ from ..core.exceptions import InputError
 from ..io.output import path_name, save_figure, write_tables, write_text
 from ..typeset.latex import mathtext_units
 from ..typeset.summary import Summary
-from .allan import AllanResult, allan_deviation
+from .allan import FLICKER_FLOOR, AllanResult, allan_deviation
 from .allan_fit import NoiseFit, fit_noise
 from .allan_report import write_allan
 from .axes import SENSORS, Axis
+from .exports import Density, NoiseExport, export_files, exports_dict, kalibr_yaml
 from .metrics import to_si_scale
 
 #: Exported terms: white noise, bias instability, rate random walk.
@@ -116,6 +121,37 @@ class ImuNoise:
         top = max(axes, key=lambda a: a.si(term))
         return top.si(term), top
 
+    def export(self, inflate: float = 1.0) -> NoiseExport:
+        """Gather the per-sensor values every VIO and autopilot export takes, times ``inflate``.
+
+        Per sensor the largest ``N`` and ``K`` over its axes (:meth:`worst`), in SI
+        (:mod:`fosmodel.noise.exports`).
+
+        Raises
+        ------
+        InputError
+            No gyro or no accelerometer axis, a sensor whose ``N`` or ``K`` no axis has, or an
+            ``inflate`` below 1 or not finite.
+        """
+        if not (math.isfinite(inflate) and inflate >= 1.0):
+            raise InputError(f"the inflation factor must be at least 1 (a moving platform is "
+                             f"noisier than a static one), got {inflate:g}")
+        missing = [s for s in SENSORS if not self.of(s)]
+        if missing:
+            raise InputError(f"each VIO and autopilot export needs gyro and accelerometer axes; "
+                             f"there is no {' and no '.join(missing)} column")
+        densities = {}
+        for sensor in SENSORS:
+            for term in ("N", "K"):
+                top = self.worst(sensor, term)
+                if top is None:
+                    raise InputError(f"the exports need the {sensor} {_TERM_NAMES[term]} "
+                                     f"(Allan {term}); no {sensor} axis has it fitted")
+                value, axis = top
+                densities[sensor, term] = Density(value, axis.axis.column, axis.value(term)[1])
+        return NoiseExport(densities, self.rate, Path(self.source).name,
+                           tuple(a.axis.column for a in self.axes), float(inflate))
+
     def table(self) -> pd.DataFrame:
         """Tabulate N, B, K of each axis beside the classic read-offs, in navigation units.
 
@@ -152,11 +188,13 @@ class ImuNoise:
         return Summary("Allan noise parameters per axis (IEEE Std 952)", info, self.table(),
                        notes)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self, inflate: float = 1.0) -> dict[str, Any]:
         """Return the exported values as a JSON-ready dict: per axis and per sensor.
 
         Per axis the values in SI (with their units and whether each is a limit) and the full
-        fit; per sensor the one-number values (largest axis).
+        fit; per sensor the one-number values (largest axis), as measured; with gyro and
+        accelerometer axes, every export's parameters after ``inflate``
+        (:func:`fosmodel.noise.exports.exports_dict`).
         """
         axes = []
         for a in self.axes:
@@ -169,9 +207,15 @@ class ImuNoise:
             axes.append({"column": a.axis.column, "sensor": a.axis.sensor,
                          "units": a.axis.units, "told": a.axis.told,
                          "noise_density": terms["N"], "bias_instability": terms["B"],
-                         "random_walk": terms["K"], "fit": a.fit.to_dict()})
-        return {"source": self.source, "rate_hz": self.rate, "tool": f"fosmodel {__version__}",
-                "axes": axes, "one_number": self._one_number()}
+                         "random_walk": terms["K"],
+                         "allan": {"taus_s": a.result.taus.tolist(),
+                                   "adev": a.result.adev.tolist()},
+                         "fit": a.fit.to_dict()})
+        out = {"source": self.source, "rate_hz": self.rate, "tool": f"fosmodel {__version__}",
+               "axes": axes, "one_number": self._one_number()}
+        if all(self.of(s) for s in SENSORS):
+            out["exports"] = exports_dict(self.export(inflate))
+        return out
 
     def _one_number(self) -> dict[str, Any]:
         out = {}
@@ -185,62 +229,49 @@ class ImuNoise:
                         "axis": axis.axis.column, "is": axis.value(term)[1]}
         return out
 
-    def kalibr_yaml(self, rostopic: str = "/imu0") -> str:
+    def kalibr_yaml(self, rostopic: str = "/imu0", inflate: float = 1.0) -> str:
         """Kalibr's ``imu.yaml``: per sensor the largest N and K over its axes, in SI.
+
+        Times ``inflate`` (:func:`fosmodel.noise.exports.kalibr_yaml`).
 
         Raises
         ------
         InputError
             The record has no gyro or no accelerometer axis (Kalibr needs both).
         """
-        missing = [s for s in SENSORS if not self.of(s)]
-        if missing:
-            raise InputError(f"a Kalibr imu.yaml needs gyro and accelerometer axes; there is no "
-                             f"{' and no '.join(missing)} column")
-        lines = [f"# IMU noise for Kalibr, from the Allan deviation of {Path(self.source).name} "
-                 f"({_axes_text(self.axes)}) by fosmodel {__version__}.",
-                 "# Continuous-time densities (Kalibr discretises them with update_rate): "
-                 "noise density = Allan N,",
-                 "# random walk = Allan rate random walk K. One number per sensor: the largest "
-                 "over its axes.", ""]
-        for sensor, title in (("accel", "Accelerometers"), ("gyro", "Gyroscopes")):
-            lines.append(f"# {title}")
-            for term, field in (("N", "noise_density"), ("K", "random_walk")):
-                top = self.worst(sensor, term)
-                if top is None:
-                    raise InputError(f"a Kalibr imu.yaml needs the {sensor} {field} (Allan "
-                                     f"{term}); no {sensor} axis has it fitted")
-                value, axis = top
-                kind = axis.value(term)[1]
-                note = "" if kind == "fitted" else f", {kind}: the fit does not resolve it"
-                lines.append(f"{_KALIBR_NAME[sensor]}_{field}: {value:.6e}  "
-                             f"# {_SI_UNITS[sensor][term]}, {axis.axis.column}{note}")
-            lines.append("")
-        lines += [f"rostopic: {rostopic}  # set to the IMU's topic",
-                  f"update_rate: {self.rate:.6g}  # Hz"]
-        return "\n".join(lines) + "\n"
+        return kalibr_yaml(self.export(inflate), rostopic)
 
-    def matlab_script(self) -> str:
-        """MATLAB ``gyroparams``/``accelparams`` (per axis, SI) and an ``imuSensor``."""
+    def matlab_script(self, inflate: float = 1.0) -> str:
+        """MATLAB ``gyroparams``/``accelparams`` (per axis, SI, times ``inflate``), imuSensor."""
         lines = [f"% IMU noise from the Allan deviation of {Path(self.source).name} by fosmodel "
                  f"{__version__}.",
-                 "% NoiseDensity = N, BiasInstability = B (Allan floor 0.664 B), RandomWalk = K; "
-                 "one value per axis in the order given,",
-                 "% or the largest over the axes when a sensor has not exactly three. Upper "
-                 "limits (terms not resolved) are marked."]
+                 (f"% Inflated {inflate:g}x for a moving platform (--inflate): every value is "
+                  f"{inflate:g} times the static record's." if inflate != 1.0 else
+                  "% Not inflated (--inflate 1): the static record's values."),
+                 "% NoiseDensity = N, BiasInstability = B (the IEEE Std 952 flicker coefficient, "
+                 "Allan floor 0.664 B), RandomWalk = K;",
+                 "% one value per axis in the order given, or the largest over the axes when a "
+                 "sensor has not exactly three. Upper limits (terms not resolved) are marked.",
+                 "% A bounded bias (Gauss-Markov) has no parameter of its own here; the datasheet "
+                 "convention's bias instability, the fitted curve's minimum / 0.664, is given "
+                 "beside each sensor."]
         made = []
         for sensor, maker in (("gyro", "gyroparams"), ("accel", "accelparams")):
             axes = self.of(sensor)
             if not axes:
                 continue
             lines.append(f"% {sensor}: {', '.join(a.axis.column for a in axes)}")
+            sheet = [inflate * a.fit.bias_stability()[0] / FLICKER_FLOOR
+                     * to_si_scale(sensor, a.axis.units) for a in axes]
+            lines.append("%   datasheet bias instability (fit minimum / 0.664): "
+                         + " ".join(f"{v:.6e}" for v in sheet))
             pairs = []
             for term, prop in (("N", "NoiseDensity"), ("B", "BiasInstability"),
                                ("K", "RandomWalk")):
                 limits = [a.axis.column for a in axes if a.value(term)[1] != "fitted"]
                 if limits:
                     lines.append(f"%   {prop}: upper limit on {', '.join(limits)}")
-                pairs.append(f"'{prop}', {_matlab_values(axes, term)}")
+                pairs.append(f"'{prop}', {_matlab_values(axes, term, inflate)}")
             lines.append(f"{sensor} = {maker}(" + ", ...\n    ".join(pairs) + ");")
             made.append(sensor)
         if len(made) == 2:  # imuSensor has no gyro-only or accelerometer-only type
@@ -255,14 +286,15 @@ class ImuNoise:
 
 
 _KALIBR_NAME = {"gyro": "gyroscope", "accel": "accelerometer"}
+_TERM_NAMES = {"N": "white noise", "K": "bias random walk"}
 
 
 def _axes_text(axes: Sequence[AxisNoise]) -> str:
     return ", ".join(a.axis.column for a in axes)
 
 
-def _matlab_values(axes: Sequence[AxisNoise], term: str) -> str:
-    values = [a.si(term) for a in axes]
+def _matlab_values(axes: Sequence[AxisNoise], term: str, inflate: float) -> str:
+    values = [inflate * a.si(term) for a in axes]
     if len(values) != 3:
         values = [max(values)]
     text = " ".join(f"{v:.6e}" for v in values)
@@ -336,33 +368,37 @@ def imu_noise(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: flo
     return ImuNoise(tuple(fitted), float(rate), source)
 
 
-def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str) -> list[Path]:
+def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str,
+                    inflate: float = 1.0) -> list[Path]:
     """Write the report of several axes in ``out_dir``.
 
-    ``noise.md/csv/tex`` (the table), ``noise_si.md/csv/tex`` (the exported SI values),
-    ``allan_gyro.png/svg`` and ``allan_accel.png/svg``, ``imu_noise.json``,
-    ``imu_params.m`` (MATLAB), ``imu.yaml`` (Kalibr, when there are gyro and accelerometer
-    axes) and each axis's own report in ``axes/<column>/``.
+    ``noise.md/csv/tex`` (the table), ``noise_si.md/csv/tex`` (the SI values, before
+    ``inflate``), ``allan_gyro.png/svg`` and ``allan_accel.png/svg``, ``imu_noise.json``,
+    ``imu_params.m`` (MATLAB), each axis's own report in ``axes/<column>/`` and, when there are
+    gyro and accelerometer axes, the files of :data:`fosmodel.noise.exports.FILES` (Kalibr,
+    OpenVINS, VINS, ORB-SLAM3, PX4, ArduPilot).  The MATLAB file and the exports are times
+    ``inflate``, which each records.
     """
+    files = {"imu_noise.json": _json(noise, inflate), "imu_params.m": noise.matlab_script(inflate)}
+    if all(noise.of(s) for s in SENSORS):
+        files.update(export_files(noise.export(inflate)))
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = write_tables(noise.table(), out_dir, "noise",
                          f"{title}: IEEE Std 952 noise terms of every axis", report=title)
     paths += write_tables(noise.si_table(), out_dir, "noise_si",
-                          f"{title}: the noise terms in SI units, as exported", report=title)
+                          f"{title}: the noise terms in SI units, before any --inflate",
+                          report=title)
     for sensor, fig in noise.figures().items():
         fig.suptitle(title)
         paths += save_figure(fig, out_dir, f"allan_{sensor}")
     for a in noise.axes:
         paths += write_allan(a.result, a.fit, out_dir / "axes" / path_name(a.axis.column),
                              f"{title}: {a.axis.column}")
-    files = {"imu_noise.json": _json(noise), "imu_params.m": noise.matlab_script()}
-    if all(noise.of(s) for s in SENSORS):
-        files["imu.yaml"] = noise.kalibr_yaml()
     for name, text in files.items():
         write_text(out_dir / name, text)
         paths.append(out_dir / name)
     return paths
 
 
-def _json(noise: ImuNoise) -> str:
-    return json.dumps(noise.to_dict(), indent=1) + "\n"
+def _json(noise: ImuNoise, inflate: float = 1.0) -> str:
+    return json.dumps(noise.to_dict(inflate), indent=1) + "\n"

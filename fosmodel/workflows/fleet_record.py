@@ -4,8 +4,10 @@
 (as :func:`fosmodel.workflows.imu.run_imu` runs them with one job), and publishes its folder of
 the store (:mod:`fosmodel.workflows.fleet`) in one rename, with the completion marker inside:
 the record's rows of the summary, the marker (:func:`fingerprint`: the file and the settings;
-each step's time) and, if asked, its reports.  BLAS is limited to one thread in the task, so
-that it gives the same bits in this process and on any worker.
+each step's time; the static stretch kept and the columns skipped) and, if asked, its reports.
+The record is checked first (:func:`fosmodel.noise.checks.check_record`): one that moves is
+refused, or with ``static_only`` cut to its longest static stretch.  BLAS is limited to one
+thread in the task, so that it gives the same bits in this process and on any worker.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from ..filter.joint_noise import joint_noise
 from ..io.formats import SUFFIXES
 from ..io.loader import load_record
 from ..io.output import report_directory
@@ -31,6 +34,7 @@ from ..io.record import Record
 from ..io.split import SplitSpec
 from ..loop.closeloop import LoopResult, close_loop
 from ..noise.axes import Axis, UnitsSpec
+from ..noise.checks import check_record, unused_columns
 from ..noise.imu_noise import ImuNoise, imu_noise
 from ..study.harness import StudyResult
 from ..study.runner import run_study
@@ -66,6 +70,9 @@ class FleetConfig:
         Keyword options of :func:`fosmodel.io.loader.load_record` (rate, gaps, topic...).
     reports : bool
         Also write each record's reports (tables and figures) into its folder.
+    static_only : bool
+        Analyse the longest static stretch of a record that moves, instead of refusing it
+        (:func:`fosmodel.noise.checks.check_record`).
     """
 
     imu: ImuConfig = field(default_factory=lambda: ImuConfig(n_jobs=1))
@@ -77,6 +84,7 @@ class FleetConfig:
     temperature: str | None = None
     load: Mapping[str, Any] = field(default_factory=dict)
     reports: bool = False
+    static_only: bool = False
 
 
 def record_name(path: str | os.PathLike[str]) -> str:
@@ -113,6 +121,10 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
     with threadpool_limits(limits=1, user_api="blas"):  # the same bits in any process
         rec = load_record(Path(path), **config.load)  # every column: the temperature too
         axes, aux = record_axes(rec, config.columns, config.units, config.temperature)
+        rec, stretch = check_record(rec, axes, config.static_only)
+        aux = {name: rec.column(name) for name in aux}  # the static stretch's, if one was kept
+        skipped = unused_columns(rec.names, [*(a.column for a in axes), *aux],
+                                 named=config.columns is not None)
         outcome = _steps(rec, axes, aux, config)
         rows = _rows(name, outcome)
         if folder.exists():  # another file's or configuration's results
@@ -125,6 +137,8 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
             marker = {"record": name, "fingerprint": fingerprint(path, config),
                       "n_samples": rec.n_samples, "rate_hz": rec.require_rate(),
                       "axes": [a.column for a in axes], "steps": list(config.steps),
+                      "static_stretch": stretch,
+                      "skipped": [f"{column}: {why}" for column, why in skipped],
                       "seconds": seconds}
             (tmp / MARKER).write_text(json.dumps(marker, indent=1) + "\n")
     return seconds["total"]
@@ -229,9 +243,11 @@ def _reports(outcome: _Outcome, out_dir: Path, name: str) -> None:
                                                       outcome.loop[a.column],
                                                       outcome.axis_seconds[a.column])
                                            for a in axes],
-                           sorted(outcome.aux), outcome.seconds["allan"])
+                           sorted(outcome.aux), outcome.seconds["allan"],
+                           joint_noise({a.column: rec.column(a.column) for a in axes},
+                                       outcome.noise) if len(axes) > 1 else None)
         write_imu_report(result, out_dir, name)
         return
     for write, args in report_parts(out_dir, name, axes, outcome.noise, outcome.study,
-                                    outcome.loop):
+                                    outcome.loop, outcome.imu.inflate):
         write(*args)

@@ -25,6 +25,7 @@ import pandas as pd
 from ..core.exceptions import InputError
 from ..core.parallel import in_workers
 from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_covariance
+from ..filter.joint_noise import JointNoise, joint_noise
 from ..filter.statespace import StateSpace
 from ..io.record import Record
 from ..loop.closeloop import LoopConfig, LoopResult, close_loop, loop_split
@@ -60,6 +61,9 @@ class ImuConfig:
         L of the loop's starting model.
     min_tau : float, optional
         Shortest averaging time of the Allan fits (default: found per axis).
+    inflate : float
+        Factor on every exported noise value, for a moving platform
+        (:mod:`fosmodel.noise.exports`; 1: the static record's values).
     n_jobs : int
         Study and loop tasks run at once (1: in this process).
     """
@@ -75,6 +79,7 @@ class ImuConfig:
     loop_split: tuple[float, float] | None = None
     loop_max_lag: int = 10
     min_tau: float | None = None
+    inflate: float = 1.0
     n_jobs: int = 2
 
     def study_config(self, rate: float, axis: Axis) -> StudyConfig:
@@ -223,6 +228,7 @@ class ImuResult:
     axes: list[AxisResult]
     aux: list[str]
     allan_seconds: float
+    joint: JointNoise | None = None
 
     def study_table(self) -> pd.DataFrame:
         """Tabulate per axis the best FOS and the best baseline of the study.
@@ -262,7 +268,7 @@ class ImuResult:
     def to_dict(self) -> dict[str, Any]:
         """Every table of the report as records, and the noise parameters."""
         return {"source": self.source, "rate_hz": self.rate, "n_samples": self.n_samples,
-                "aux": self.aux, "noise": self.noise.to_dict(),
+                "aux": self.aux, "noise": self.noise.to_dict(self.config.inflate),
                 "study": _records(self.study_table()), "loop": _records(self.loop_table()),
                 "loops": {a.axis.column: a.loop.to_json_dict() for a in self.axes}}
 
@@ -342,6 +348,7 @@ def run_imu(
     config = config.for_record(n, rate)
     start = time.perf_counter()
     noise = imu_noise(columns, axes, rate, source, min_tau=config.min_tau)
+    joint = joint_noise(columns, noise) if len(axes) > 1 else None
     allan_s = time.perf_counter() - start
     say(f"allan: {len(axes)} axes in {allan_s:.1f} s")
     channels = {**{a.column: columns[a.column] for a in axes}, **(aux or {})}
@@ -353,7 +360,8 @@ def run_imu(
     results = [AxisResult(a, done[a.column, "study"][0], done[a.column, "loop"][0],
                           {"study": done[a.column, "study"][1],
                            "loop": done[a.column, "loop"][1]}) for a in axes]
-    return ImuResult(source, float(rate), n, config, noise, results, sorted(aux or {}), allan_s)
+    return ImuResult(source, float(rate), n, config, noise, results, sorted(aux or {}), allan_s,
+                     joint)
 
 
 def _check(columns: Mapping[str, np.ndarray], axes: Sequence[Axis],

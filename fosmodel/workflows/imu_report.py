@@ -7,12 +7,14 @@ Layout of the report directory::
 
     report.md            the page: noise, study and loop tables (a row per axis), run times
     noise.* study.* loop.* timing.*   each table as Markdown, CSV and LaTeX
-    noise/               the Allan report of all axes: imu.yaml (Kalibr), imu_params.m
-                         (MATLAB), imu_noise.json, the figures, each axis under noise/axes/
+    noise/               the Allan report of all axes: imu.yaml (Kalibr), the OpenVINS,
+                         VINS, ORB-SLAM3, PX4 and ArduPilot files, imu_params.m (MATLAB),
+                         imu_noise.json, the figures, each axis under noise/axes/
     study/AXIS/          each axis's model-order study
     loop/AXIS/           each axis's residual loop
     models/AXIS.json     each axis's FOS error model (``fosmodel predict`` reads it)
     filter/allan_model.json   the axes' Allan error models as one state-space shaping filter
+    filter/joint_model.json   the same with the axes' correlations in its driving noise
 """
 
 from __future__ import annotations
@@ -61,9 +63,14 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
     models = [_write_model(result, a, _mkdir(out_dir / "models")) for a in result.axes]
     filter_path = _mkdir(out_dir / "filter") / "allan_model.json"
     write_text(filter_path, json.dumps(result.filter_dict(), indent=1) + "\n")
+    if result.joint is not None:
+        write_text(out_dir / "filter" / "joint_model.json",
+                   json.dumps({"source": result.source, **result.joint.to_dict()}, indent=1)
+                   + "\n")
     report = out_dir / "report.md"
     write_text(report, _page(result, title, tables, models))
-    return [*paths, *(p for p, _ in models), filter_path, report]
+    joint = [out_dir / "filter" / "joint_model.json"] if result.joint is not None else []
+    return [*paths, *(p for p, _ in models), filter_path, *joint, report]
 
 
 def write_imu_tables(result: ImuResult, out_dir: Path,
@@ -102,23 +109,24 @@ def _parts(result: ImuResult, out_dir: Path, title: str) -> list[tuple[Callable,
     """
     return report_parts(out_dir, title, [a.axis for a in result.axes], result.noise,
                         {a.axis.column: a.study for a in result.axes},
-                        {a.axis.column: a.loop for a in result.axes})
+                        {a.axis.column: a.loop for a in result.axes}, result.config.inflate)
 
 
 def report_parts(
     out_dir: Path, title: str, axes: Sequence[Axis], noise: ImuNoise | None = None,
     studies: Mapping[str, StudyResult] | None = None,
-    loops: Mapping[str, LoopResult] | None = None,
+    loops: Mapping[str, LoopResult] | None = None, inflate: float = 1.0,
 ) -> list[tuple[Callable, tuple]]:
     """List the reports of the steps given, each a writer and its arguments.
 
-    The noise of every axis in ``noise/``, and each axis's study and loop in
-    ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of the steps it ran),
-    ``AXIS`` the column's name as a file name (:func:`fosmodel.io.output.path_name`).
+    The noise of every axis in ``noise/`` (its exports times ``inflate``), and each axis's
+    study and loop in ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of
+    the steps it ran), ``AXIS`` the column's name as a file name
+    (:func:`fosmodel.io.output.path_name`).
     """
     parts: list[tuple[Callable, tuple]] = []
     if noise is not None:
-        parts.append((write_imu_noise, (noise, _mkdir(out_dir / "noise"), title)))
+        parts.append((write_imu_noise, (noise, _mkdir(out_dir / "noise"), title, inflate)))
     for a in axes:
         if studies:
             parts.append((write_study, (studies[a.column],
@@ -166,8 +174,13 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
     sections = [
         ("Noise parameters (Allan variance)", "noise",
          "IEEE Std 952 terms fitted to each axis's overlapping Allan deviation; exports for "
-         "Kalibr (`noise/imu.yaml`), MATLAB (`noise/imu_params.m`) and JSON "
-         "(`noise/imu_noise.json`); figures `noise/allan_gyro.png`, `noise/allan_accel.png`."),
+         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/openvins_kalibr_imu_chain.yaml`), "
+         "VINS-Mono/Fusion (`noise/vins_imu.yaml`), ORB-SLAM3 (`noise/orbslam3_imu.yaml`), "
+         "PX4 EKF2 (`noise/px4_ekf2.params`), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
+         "MATLAB (`noise/imu_params.m`) and JSON (`noise/imu_noise.json`)"
+         + (f", inflated {result.config.inflate:g}x for a moving platform" if
+            result.config.inflate != 1.0 else "")
+         + "; figures `noise/allan_gyro.png`, `noise/allan_accel.png`."),
         ("Model-order study", "study",
          "Each method fitted on the first segment, its order chosen on the second, scored on "
          "the rest (fair protocol: every method on the same raw data). Each axis's full "
@@ -190,6 +203,10 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
               "first-order Gauss-Markov bias instability, a random-walk bias) as one "
               "block-diagonal shaping filter at the record's rate: Phi, G, Q, H and the "
               "initial covariance P0 (see the docs' Kalman page)."]
+    if result.joint is not None:
+        lines.append("- `filter/joint_model.json`: the same states with the axes' correlations "
+                     "in the driving noise (white parts from the first differences, biases from "
+                     "the cross Allan covariance), and the correlation matrices.")
     lines += [f"- `models/{p.name}`: {which} (FOS; `fosmodel predict` reads it)."
               for p, which in models]
     frame, caption = tables["timing"]
