@@ -39,7 +39,7 @@ from ..core.candidates import (
     evaluate_terms,
     generate_terms,
 )
-from ..core.correlations import LagCorrelations, PooledCorrelations
+from ..core.correlations import LagCorrelations, PooledCorrelations, fast_correlations
 from ..core.derived import channels_read, derive, is_derived
 from ..core.exceptions import FitWarning, InputError
 from ..core.fos import (
@@ -311,7 +311,7 @@ class FOSModel(BaseEstimator):
         corr: Correlations
         if self.correlations == "fast":
             with one_blas_thread():  # short products: threads cost more than they give
-                parts = [LagCorrelations(terms, piece, n0, offsets=pending) for piece in pieces]
+                parts = [fast_correlations(terms, piece, n0, offsets=pending) for piece in pieces]
                 corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
                 res = fos_search(corr, rule, intercept=True,
                                   dependence_tol=self.dependence_tol)
