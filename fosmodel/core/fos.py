@@ -298,8 +298,10 @@ def fos_search(
 
     active = np.ones(n_cand, dtype=bool)
     dependent = np.zeros(n_cand, dtype=bool)
+    newly = np.empty(n_cand, dtype=bool)
     live_floor = floor.copy()  # floor, -inf once a candidate is selected or dependent
     q_all = np.full(n_cand, -np.inf)  # Q of the active candidates, -inf for the others
+    c_sq = np.empty(n_cand)
     d_hist = np.empty((max(cap, 0), n_cand))  # D(c, r) for each selected r
     a_hist = np.empty((max(cap, 0), n_cand))  # alpha_cr = D(c, r) / D(r, r)
     support: list[int] = []
@@ -313,15 +315,16 @@ def fos_search(
         if stop.reached(mse, mse_null, corr.y_mean_sq):
             reason = stop.kind
             break
-        newly = d_rem <= live_floor
-        if newly.any():
+        # the bookkeeping of a step is a few calls on arrays of C: on small sets their
+        # overhead is the cost, so they reuse buffers and count instead of any()
+        if np.count_nonzero(np.less_equal(d_rem, live_floor, out=newly)):
             dependent |= newly
             active &= ~newly
             live_floor[newly] = q_all[newly] = -np.inf
-            if not active.any():
+            if not np.count_nonzero(active):
                 reason = "exhausted"
                 break
-        np.divide(c_rem * c_rem, d_rem, out=q_all, where=active)
+        np.divide(np.multiply(c_rem, c_rem, out=c_sq), d_rem, out=q_all, where=active)
         j = int(q_all.argmax())
         q = float(q_all[j])
         mse_new = max(mse - q, 0.0)
