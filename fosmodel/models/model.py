@@ -299,7 +299,7 @@ class FOSModel(BaseEstimator):
                 f"window (after the lag window of {n0}) for {n_cand} candidates; FOS needs "
                 f"at least {n_cand + 2} to tell them apart: lower the lag, the degree or the "
                 "channels, or give a longer record")
-        if np.ptp(y_arr) == 0:
+        if y_arr[0] == y_arr[-1] and np.ptp(y_arr) == 0:  # ends that differ need no scan
             raise InputError(f"y is constant ({y_arr[0]:g}): there is nothing to model")
         channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
         _refuse_own_input(y_arr, channels)
