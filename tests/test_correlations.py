@@ -216,19 +216,16 @@ def test_pair_steps_in_blocked_windows_with_offsets_match_reference(pair_steps_e
 
 
 def test_pair_steps_plan_each_shape_as_head_times_moved_tail():
-    # y[t] x[t-1] * (y[t-2] x[t-4]): head (y, x, 1), tail the pair (y, x, 2) moved 2 samples
-    ch = np.array([[0, 1, 0, 1], [0, 0, 1, 2]])
-    rel = np.array([[0, 1, 2, 4], [0, 3, 1, 0]])  # the second: y[t] y[t-3] x[t-1]
-    steps = shapes.pair_steps(ch, rel, np.array([0, 1]), absent=2)
-    assert steps.singles.tolist() == [0]  # the second's tail is y[t-3] alone
+    # y[t] x[t-1] * (y[t-2] x[t-4]): head (y, x, 1), tail the pair (y, x, 2) moved 2 samples;
+    # x[t] y[t-3] y[t-3] x[t-4] (factors out of shift order): head (x, y, 3), tail (y, x, 1)
+    ch = np.array([[0, 1, 0, 1], [0, 0, 1, 1]])
+    rel = np.array([[0, 1, 2, 4], [3, 3, 0, 4]])
+    steps = shapes.pair_steps(ch, rel, np.array([0, 1]))
     pairs = [tuple(p) for p in steps.pairs.tolist()]
     assert pairs == sorted(pairs, key=lambda p: p[2])
-    by_shape = {int(s): (q, h_lo + h, t_lo + t) for q, h_lo, _, t_lo, _, shp, hh, tt in steps.steps
-                for s, h, t in zip(shp, hh, tt)}
-    q, h, t = by_shape[0]
-    assert (q, pairs[h], pairs[t - 1]) == (2, (0, 1, 1), (0, 1, 2))
-    q, h, t = by_shape[1]
-    assert (q, pairs[h], t) == (3, (0, 1, 1), 0)
+    by_shape = {int(s): (q, pairs[h_lo + h], pairs[t_lo + t])
+                for q, h_lo, _, t_lo, _, shp, hh, tt in steps.steps for s, h, t in zip(shp, hh, tt)}
+    assert by_shape == {0: (2, (0, 1, 1), (0, 1, 2)), 1: (3, (1, 0, 3), (0, 1, 1))}
 
 
 def test_gram_columns_at_once_equal_them_one_at_a_time(monkeypatch):

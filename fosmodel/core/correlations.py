@@ -13,7 +13,15 @@ many terms it selects, instead of a dot product per Gram entry.
 Moments of a degree above ``table_degree`` (e.g. a product of two
 cross-products) have few repeated shapes; they are summed directly over the
 window, sharing partial products through a prefix tree, so that the N x C
-candidate matrix is never formed.
+candidate matrix is never formed.  When a search first needs the Gram column
+of a cross-product, the columns of every candidate are tabulated at once if
+the set is small (CP = 2 up to about L = 12): then all shapes of degree 4
+over the lags are summed as *pair steps*, one matrix product of pair
+products ``u(t) u(t-d)`` per lag shift (:class:`fosmodel.core.shapes.PairSteps`).
+
+Large sets of products of degree 3 and 4 (thousands of candidates over 20
+lags and more) have their own provider, :mod:`fosmodel.core.pairs`;
+:func:`fast_correlations` picks the provider for a candidate set.
 
 Which moments come from the tables, and how shapes are keyed and grouped,
 does not depend on the data: :mod:`fosmodel.core.shapes` plans it, once per
@@ -308,31 +316,27 @@ class LagCorrelations:
     def _add_pair_steps(self, sums: np.ndarray, plan: PairSteps, lo: int, hi: int) -> None:
         """Add to ``sums`` the shapes of ``plan`` summed over ``t = lo..hi-1``.
 
-        The single signals and pair products are formed over spans of at most
-        ``_PAIR_SPAN`` samples (and the ``N0`` before each, the tails' lags), at most
-        ``_PAIR_VALUES`` values at a time; each step is one matrix product per
-        ``_PAIR_CHUNK`` samples of a span, which keeps its rows in cache.
+        The pair products are formed over spans of at most ``_PAIR_SPAN`` samples (and
+        the ``N0`` before each, the tails' lags), at most ``_PAIR_VALUES`` values at a
+        time; each step is one matrix product per ``_PAIR_CHUNK`` samples of a span,
+        which keeps its rows in cache.
         """
-        n0, n_single = self._n0, len(plan.singles)
-        n_rows = n_single + len(plan.pairs)
-        span = max(_PAIR_CHUNK, min(_PAIR_SPAN, _PAIR_VALUES // n_rows))
+        n0 = self._n0
+        span = max(_PAIR_CHUNK, min(_PAIR_SPAN, _PAIR_VALUES // len(plan.pairs)))
         acc = [np.zeros((h_hi - h_lo, t_hi - t_lo)) for _, h_lo, h_hi, t_lo, t_hi, *_ in plan.steps]
-        rows = np.empty((n_rows, min(span, hi - lo) + n0))
+        rows = np.empty((len(plan.pairs), min(span, hi - lo) + n0))
         for a in range(lo, hi, span):
             b = min(a + span, hi)
-            block = rows[:, : b - a + n0]  # block[:, i] is at sample a - N0 + i
-            for i, c in enumerate(plan.singles.tolist()):
-                block[i] = self._factor(c, 0, a - n0, b)
-            for i, (c1, c2, d) in enumerate(plan.pairs.tolist(), start=n_single):
+            z = rows[:, : b - a + n0]  # z[:, i] is at sample a - N0 + i
+            for i, (c1, c2, d) in enumerate(plan.pairs.tolist()):
                 skip = max(d - (a - n0), 0)  # before the record: never read (see PairSteps)
-                block[i, :skip] = 0.0
+                z[i, :skip] = 0.0
                 np.multiply(self._factor(c1, 0, a - n0 + skip, b),
-                            self._factor(c2, d, a - n0 + skip, b), out=block[i, skip:])
-            heads = block[n_single:]
+                            self._factor(c2, d, a - n0 + skip, b), out=z[i, skip:])
             for c in range(n0, b - a + n0, _PAIR_CHUNK):
                 d = min(c + _PAIR_CHUNK, b - a + n0)
                 for (q, h_lo, h_hi, t_lo, t_hi, *_), out in zip(plan.steps, acc):
-                    out += heads[h_lo:h_hi, c:d] @ block[t_lo:t_hi, c - q : d - q].T
+                    out += z[h_lo:h_hi, c:d] @ z[t_lo:t_hi, c - q : d - q].T
         for (*_, shapes, h, t), out in zip(plan.steps, acc):
             sums[shapes] += out[h, t]
 

@@ -134,26 +134,22 @@ def lookup(keys: np.ndarray, table_keys: np.ndarray, table_slots: np.ndarray) ->
 
 @dataclass(frozen=True)
 class PairSteps:
-    """How a batch's new shapes of degree 3 and 4 are summed: products of pair products.
+    """How a batch's new shapes of degree 4 are summed: products of pair products.
 
     Sorted by lag shift, a shape's factors are a *head*, its first two (the first at
-    shift 0), and a *tail*, the rest, moved ``q`` samples (the shift of its first factor):
+    shift 0), and a *tail*, its last two, moved ``q`` samples (the shift of the third):
 
-        sum_t u_a(t) u_b(t - d) * v(t - q),
+        sum_t z_h(t) z_k(t - q),   z(s) = u_c1(s) u_c2(s - d),
 
-    ``v`` a single signal or a pair product ``u_c(s) u_e(s - d')``.  The pair products
-    ``z(s) = u_c1(s) u_c2(s - d)`` are the rows ``pairs`` = ``(c1, c2, d)``, sorted by
-    ``d``; the tails are the rows of ``singles`` (channels) followed by those of
-    ``pairs``.  Each step ``(q, h_lo, h_hi, t_lo, t_hi, shapes, h, t)`` is one matrix
-    product of the heads ``h_lo..h_hi-1`` with the tails ``t_lo..t_hi-1`` moved ``q``
-    samples; the new shapes ``shapes`` are its entries ``(h, t)`` (relative to
-    ``h_lo``, ``t_lo``).  Heads sorted by ``d`` need ``d <= q``, tails ``d' <= N0 - q``,
-    so each step's heads and tails are the first rows of each and the products read
-    only samples of the record.
+    the pair products ``z`` being the rows ``pairs`` = ``(c1, c2, d)``, sorted by ``d``.
+    Each step ``(q, h_lo, h_hi, t_lo, t_hi, shapes, h, t)`` is one matrix product of the
+    rows ``h_lo..h_hi-1`` (heads) with the rows ``t_lo..t_hi-1`` moved ``q`` samples
+    (tails); the new shapes ``shapes`` are its entries ``(h, t)`` (relative to ``h_lo``,
+    ``t_lo``).  A head needs ``d <= q`` and a tail ``d <= N0 - q``, so each step's rows
+    are the first ones and its products read only samples of the record.
     """
 
     pairs: np.ndarray
-    singles: np.ndarray
     steps: tuple[tuple[int, int, int, int, int, np.ndarray, np.ndarray, np.ndarray], ...]
 
 
@@ -161,8 +157,8 @@ class PairSteps:
 class NewShapes:
     """Shapes a batch adds to the tables, as rows ``base, base + 1, ...``.
 
-    Those of degree 3 and 4 are summed as :class:`PairSteps` say, the others by the
-    groups of their leading factors.
+    Those in :class:`PairSteps` are summed as they say, the others by the groups of their
+    leading factors.
     """
 
     groups: dict  # Geometry.group_by_prefix of the codes of the shapes not in pair steps
@@ -186,43 +182,35 @@ def new_shapes(geo: Geometry, codes: np.ndarray) -> NewShapes:
     for by_last in groups.values():
         for key, (rows, rels) in by_last.items():
             by_last[key] = (rest[rows], rels)
-    steps = pair_steps(ch, rel, np.flatnonzero(paired), geo.n_channels) if paired.any() else None
+    # the present factors come last among the sorted codes: move them first for pair steps
+    present = np.argsort(codes == 0, axis=1, kind="stable")
+    steps = (pair_steps(np.take_along_axis(ch, present, 1), np.take_along_axis(rel, present, 1),
+                        np.flatnonzero(paired)) if paired.any() else None)
     return NewShapes(groups, ch, rel, steps)
 
 
-def pair_steps(ch: np.ndarray, rel: np.ndarray, shapes: np.ndarray, absent: int) -> PairSteps:
-    """Plan the shapes ``shapes`` (rows of ``ch``, ``rel``; 3 or 4 factors each) as pair steps.
-
-    ``absent`` is the channel of an absent factor.
-    """
-    c, r = ch[shapes], rel[shapes]
-    order = np.argsort(np.where(c == absent, np.iinfo(np.int64).max,
-                                r * (absent + 1) + c), axis=1, kind="stable")
+def pair_steps(ch: np.ndarray, rel: np.ndarray, shapes: np.ndarray) -> PairSteps:
+    """Plan the shapes ``shapes`` (rows of ``ch``, ``rel``, four factors first) as pair steps."""
+    c, r = ch[shapes, :4], rel[shapes, :4]
+    order = np.argsort(r * (ch.max() + 1) + c, axis=1, kind="stable")  # by shift
     c, r = np.take_along_axis(c, order, 1), np.take_along_axis(r, order, 1)
-    four = c[:, 3] != absent if c.shape[1] > 3 else np.zeros(len(c), dtype=bool)
     heads = np.column_stack([c[:, 0], c[:, 1], r[:, 1]])
+    tails = np.column_stack([c[:, 2], c[:, 3], r[:, 3] - r[:, 2]])
     q = r[:, 2]
-    tail_pairs = np.column_stack([c[:, 2], c[:, min(3, c.shape[1] - 1)],
-                                  r[:, min(3, c.shape[1] - 1)] - q])[four]
-    pairs = np.unique(np.vstack([heads, tail_pairs]), axis=0)
+    pairs = np.unique(np.vstack([heads, tails]), axis=0)
     pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0], pairs[:, 2]))]  # by shift d
-    singles = np.unique(c[~four, 2])
-    head_row = _row_of(pairs, heads)
-    tail_row = np.empty(len(c), dtype=np.intp)
-    tail_row[~four] = np.searchsorted(singles, c[~four, 2])
-    tail_row[four] = len(singles) + _row_of(pairs, tail_pairs)
+    head_row, tail_row = _row_of(pairs, heads), _row_of(pairs, tails)
     steps = []
     for lag in np.unique(q).tolist():
         at = np.flatnonzero(q == lag)
         h, t = head_row[at], tail_row[at]
         h_lo, t_lo = int(h.min()), int(t.min())
-        for a in (at, h, t):
+        entries = (shapes[at], h - h_lo, t - t_lo)
+        for a in entries:
             a.flags.writeable = False
-        steps.append((lag, h_lo, int(h.max()) + 1, t_lo, int(t.max()) + 1, shapes[at],
-                      h - h_lo, t - t_lo))
-    for a in (pairs, singles):
-        a.flags.writeable = False
-    return PairSteps(pairs, singles, tuple(steps))
+        steps.append((lag, h_lo, int(h.max()) + 1, t_lo, int(t.max()) + 1, *entries))
+    pairs.flags.writeable = False
+    return PairSteps(pairs, tuple(steps))
 
 
 def _row_of(table: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -433,7 +421,7 @@ def _arrays(batch: Batch) -> list[np.ndarray]:
     if batch.new is not None:
         arrays += [batch.new.ch, batch.new.rel]
         if batch.new.pair_steps is not None:
-            arrays += [batch.new.pair_steps.pairs, batch.new.pair_steps.singles]
+            arrays.append(batch.new.pair_steps.pairs)
     return arrays
 
 
