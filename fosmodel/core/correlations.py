@@ -15,7 +15,7 @@ cross-products) have few repeated shapes; they are summed directly over the
 window, sharing partial products through a prefix tree, so that the N x C
 candidate matrix is never formed.  When a search first needs the Gram column
 of a cross-product, the columns of every candidate are tabulated at once if
-the set is small (CP = 2 up to about L = 12): then all shapes of degree 4
+the set is small (CP = 2 up to L = 21 on one signal): then all shapes of degree 4
 over the lags are summed as *pair steps*, one matrix product of pair
 products ``u(t) u(t-d)`` per lag shift (:class:`fosmodel.core.shapes.PairSteps`).
 

@@ -452,8 +452,9 @@ def deferred_center(a: np.ndarray) -> tuple[np.ndarray, float, float]:
 def _constant_columns(cols: np.ndarray) -> np.ndarray:
     """Which columns of the 2-D, non-empty ``cols`` hold one value exactly (a boolean mask)."""
     constant = cols[0] == cols[-1]  # a column whose ends differ varies: no need to scan it
-    maybe = np.flatnonzero(constant)
-    constant[maybe] = np.ptp(cols[:, maybe], axis=0) == 0
+    if constant.any():
+        maybe = np.flatnonzero(constant)
+        constant[maybe] = np.ptp(cols[:, maybe], axis=0) == 0
     return constant
 
 
