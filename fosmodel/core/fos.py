@@ -300,7 +300,10 @@ def fos_search(
     dependent = np.zeros(n_cand, dtype=bool)
     newly = np.empty(n_cand, dtype=bool)
     live_floor = floor.copy()  # floor, -inf once a candidate is selected or dependent
-    q_all = np.full(n_cand, -np.inf)  # Q of the active candidates, -inf for the others
+    # D(c,c) of a selected or dependent candidate is set to inf: its Q is then 0, never
+    # above an active candidate's unless no candidate reduces the MSE (then the search
+    # stops whichever it picks), so Q needs no mask
+    q_all = np.empty(n_cand)
     c_sq = np.empty(n_cand)
     d_hist = np.empty((max(cap, 0), n_cand))  # D(c, r) for each selected r
     a_hist = np.empty((max(cap, 0), n_cand))  # alpha_cr = D(c, r) / D(r, r)
@@ -320,11 +323,11 @@ def fos_search(
         if np.count_nonzero(np.less_equal(d_rem, live_floor, out=newly)):
             dependent |= newly
             active &= ~newly
-            live_floor[newly] = q_all[newly] = -np.inf
+            live_floor[newly], d_rem[newly] = -np.inf, np.inf
             if not np.count_nonzero(active):
                 reason = "exhausted"
                 break
-        np.divide(np.multiply(c_rem, c_rem, out=c_sq), d_rem, out=q_all, where=active)
+        np.divide(np.multiply(c_rem, c_rem, out=c_sq), d_rem, out=q_all)
         j = int(q_all.argmax())
         q = float(q_all[j])
         mse_new = max(mse - q, 0.0)
@@ -342,7 +345,7 @@ def fos_search(
         if r:
             d_col -= a_hist[:r].T @ d_hist[:r, j]  # eq. 19
         d_jj = float(d_col[j])
-        active[j], live_floor[j], q_all[j] = False, -np.inf, -np.inf
+        active[j], live_floor[j], d_rem[j] = False, -np.inf, np.inf
         if not d_jj > floor[j]:  # fresher than d_rem[j]; guard rounding
             dependent[j] = True
             continue
