@@ -126,28 +126,35 @@ def stopwatch(totals: dict, key: str):
 
 
 def where_time_goes(y: np.ndarray, exog: dict, lags: int) -> dict[str, float]:
-    """One fit with the pair products' parts timed: seconds per part, and the products' work."""
+    """One fit with its parts timed: seconds per part, and the tile products' multiply-adds.
+
+    The pair products and tile products are counted in the pass they belong to: the
+    first pass (every candidate's mean, correlation with y and mean square) or the Gram
+    columns of the selected terms.
+    """
     totals: dict[str, float] = {}
     products, add_tiles = pairs._products, pairs._add_tiles
     pair_init, column = PairCorrelations.__init__, PairCorrelations.column
-    work = {"fma": 0}
+    state = {"pass": "first pass", "fma": 0}
 
     def timed_products(*args, **kwargs):
-        with stopwatch(totals, "pair products"):
+        with stopwatch(totals, f"{state['pass']}: pair products"):
             return products(*args, **kwargs)
 
     def timed_tiles(acc, left, right, tiles):
-        work["fma"] += sum((b - a) * (d - c) for a, b, c, d in tiles) * left.shape[1]
-        with stopwatch(totals, "tile products"):
+        state["fma"] += sum((b - a) * (d - c) for a, b, c, d in tiles) * left.shape[1]
+        with stopwatch(totals, f"{state['pass']}: tile products"):
             return add_tiles(acc, left, right, tiles)
 
     def timed_init(self, *args, **kwargs):
         with stopwatch(totals, "plan"):
             pair_plan(tuple(t.factors for t in args[0]))
+        state["pass"] = "first pass"
         with stopwatch(totals, "first pass"):
             pair_init(self, *args, **kwargs)
 
     def timed_column(self, j):
+        state["pass"] = "Gram columns"
         with stopwatch(totals, "Gram columns"):
             return column(self, j)
 
@@ -162,9 +169,13 @@ def where_time_goes(y: np.ndarray, exog: dict, lags: int) -> dict[str, float]:
     finally:
         pairs._products, pairs._add_tiles = products, add_tiles
         PairCorrelations.__init__, PairCorrelations.column = pair_init, column
-    totals["fma"] = work["fma"]
-    for key in ("plan", "first pass", "Gram columns", "pair products", "tile products"):
-        totals.setdefault(key, 0.0)  # zero where the candidates were too few for pair products
+    for phase in ("first pass", "Gram columns"):  # zero where the set took the tables
+        for part in ("", ": pair products", ": tile products"):
+            totals.setdefault(phase + part, 0.0)
+    totals.setdefault("plan", 0.0)
+    totals["search and model"] = totals["fit"] - totals["plan"] - totals["first pass"] - totals[
+        "Gram columns"]
+    totals["fma"] = state["fma"]
     return totals
 
 
@@ -214,14 +225,45 @@ def figure(times: dict[str, float], parts: dict[str, float], path: Path) -> None
         left.text(times[n] * 1.1, i, f"{times[n]:.3g} s", va="center", fontsize=8)
     left.set_title("FROLS, ylag = xlag = 10, degree 4: 10,626 candidates, 20,000 rows",
                    fontsize=9)
-    keys = ["plan", "first pass", "pair products", "tile products", "search and model"]
-    right.bar(keys, [parts[k] for k in keys], color="#1565c0")
+    keys = ["plan", "first pass", "Gram columns", "search and model"]
+    tiles = [parts.get(f"{k}: tile products", 0.0) for k in keys]
+    pair = [parts.get(f"{k}: pair products", 0.0) for k in keys]
+    other = [parts[k] - t - p for k, t, p in zip(keys, tiles, pair)]
+    right.bar(keys, tiles, color="#1565c0", label="tile products")
+    right.bar(keys, pair, bottom=tiles, color="#64b5f6", label="pair products")
+    right.bar(keys, other, bottom=np.add(tiles, pair), color="#bbdefb", label="other")
+    right.legend(fontsize=7)
     right.set_ylabel("seconds in one fosmodel fit")
     right.tick_params(axis="x", labelrotation=30, labelsize=8)
     right.set_title("where fosmodel's fit spends its time", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def parts_lines(y_fos: np.ndarray, exog: dict, lags: int,
+                fos: FOSModel) -> tuple[list[str], dict[str, float]]:
+    """The report of where a fosmodel fit's time goes, its memory, and the parts."""
+    parts = where_time_goes(y_fos, exog, lags)
+    tiles = parts["first pass: tile products"] + parts["Gram columns: tile products"]
+    rate = parts["fma"] / max(tiles, 1e-12)
+    peak = peak_gemm_rate()
+    memory = fit_memory(y_fos, exog, lags)
+    n = len(y_fos) - lags
+    n_cand = fos.n_candidates_
+    lines = ["", f"where one fosmodel fit's {parts['fit']:.3f} s go (instrumented fit, plans "
+              "cleared):"]
+    for k in ("plan", "first pass", "first pass: pair products", "first pass: tile products",
+              "Gram columns", "Gram columns: pair products", "Gram columns: tile products",
+              "search and model"):
+        lines.append(f"  {k:<30} {parts[k]:7.3f} s  {100 * parts[k] / parts['fit']:5.1f} %")
+    lines += [f"tile products: {parts['fma'] / 1e9:.1f} G multiply-adds at {rate / 1e9:.1f} G/s; "
+              f"a 1024^3 product on one thread here: {peak / 1e9:.1f} G/s "
+              f"({rate / peak:.0%} of it)",
+              f"entries the tiles compute per candidate: {tile_entries(fos):.2f}",
+              f"peak memory allocated during a fit: {memory / 2**20:.0f} MiB; the N x C matrix "
+              f"of candidates would take {n * (n_cand - 1) * 8 / 2**20:,.0f} MiB"]
+    return lines, parts
 
 
 def main() -> int:
@@ -232,6 +274,8 @@ def main() -> int:
                         help="smoke check: lags 1-4 (495 candidates), 2,000 rows, one round")
     parser.add_argument("--blas-threads", type=int,
                         help="limit the BLAS threads (threadpoolctl); default: as the environment")
+    parser.add_argument("--parts", action="store_true",
+                        help="only where a fosmodel fit's time goes (no SysIdentPy fit)")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "sysidentpy.txt")
     args = parser.parse_args()
     try:
@@ -246,6 +290,10 @@ def main() -> int:
     lines = [machine_line(), f"sysidentpy {sysidentpy.__version__}; {rows} training rows; "
              f"medians of {rounds} interleaved rounds (wall time; CPU time of this process)", ""]
 
+    if args.parts:
+        print("\n".join(lines[:1] + parts_lines(y_fos, exog, lags, fos_model(lags).fit(
+            y_fos, exog))[0]))
+        return 0
     times: dict[str, list[float]] = {"SysIdentPy": [], "fosmodel first": [], "fosmodel": []}
     cpu: dict[str, list[float]] = {k: [] for k in times}
     frols = fos = None
@@ -280,26 +328,8 @@ def main() -> int:
               f"FROLS's terms:    {', '.join(sorted(found))}",
               f"the system's three terms first in fosmodel and in FROLS: {'yes' if same else 'NO'}"]
 
-    parts = where_time_goes(y_fos, exog, lags)
-    parts["search and model"] = parts["fit"] - sum(
-        parts.get(k, 0.0) for k in ("plan", "first pass", "Gram columns"))
-    parts["Gram columns"] -= parts["pair products"] + parts["tile products"]
-    rate = parts["fma"] / max(parts["tile products"], 1e-12)
-    peak = peak_gemm_rate()
-    memory = fit_memory(y_fos, exog, lags)
-    n = len(y_fos) - lags
-    lines += ["", f"where one fosmodel fit's {parts['fit']:.3f} s go (instrumented fit, plans "
-              "cleared):"]
-    for k in ("plan", "first pass", "pair products", "tile products", "Gram columns",
-              "search and model"):
-        lines.append(f"  {k:<18} {parts[k]:7.3f} s  {100 * parts[k] / parts['fit']:5.1f} %")
-    lines += ["  (Gram columns: their remainder besides pair and tile products)",
-              f"tile products: {parts['fma'] / 1e9:.1f} G multiply-adds at {rate / 1e9:.1f} G/s; "
-              f"a 1024^3 product on one thread here: {peak / 1e9:.1f} G/s "
-              f"({rate / peak:.0%} of it)",
-              f"entries the tiles compute per candidate: {tile_entries(fos):.2f}",
-              f"peak memory allocated during a fit: {memory / 2**20:.0f} MiB; the N x C matrix "
-              f"of candidates would take {n * (n_cand - 1) * 8 / 2**20:,.0f} MiB"]
+    more, parts = parts_lines(y_fos, exog, lags, fos)
+    lines += more
     text = "\n".join(lines)
     print(text)
     if not args.quick:
