@@ -47,31 +47,57 @@ def machine_line() -> str:
             f"OPENBLAS_NUM_THREADS={threads}")
 
 
-def interleaved_best(
+def interleaved_times(
     fns: Mapping[str, Callable[[], object]], repeats: int,
-    few: Mapping[str, int] | None = None, loop_s: float = 0.02,
-) -> dict[str, float]:
-    """Best time per call of each function, timed round-robin to share the machine's noise.
+    few: Mapping[str, int] | None = None, loop_s: float = 0.02, cpu: bool = False,
+) -> dict[str, list[float]]:
+    """Time per call of each function in every round, timed round-robin to share the noise.
 
     As ``timeit`` does, each round runs a function in a loop of consecutive
     calls lasting at least ``loop_s`` seconds (one call for slow functions)
-    and takes the loop's mean; the result is the best round.  Timing single
-    calls of a fast function right after a slow one would charge it the
-    caches and page faults the slow one left behind.  ``few`` caps the rounds
-    of slow functions: ``{"frols": 3}`` times it only in the first 3 rounds.
+    and takes the loop's mean.  Timing single calls of a fast function right
+    after a slow one would charge it the caches and page faults the slow one
+    left behind.  ``few`` caps the rounds of slow functions: ``{"frols": 3}``
+    times it only in the first 3 rounds.  With ``cpu``, each list is followed
+    in the result by the CPU time of this thread per call in the same loops,
+    under the function's name with `` cpu`` appended: on a machine shared with
+    other work, the time the thread waited for a core is in the wall time only.
     """
     few = few or {}
     number = {name: _calls_per_loop(fn, loop_s) for name, fn in fns.items()}
-    best = dict.fromkeys(fns, np.inf)
+    times: dict[str, list[float]] = {name: [] for name in fns}
+    times.update({f"{name} cpu": [] for name in fns} if cpu else {})
     for round_ in range(repeats):
         for name, fn in fns.items():
             if round_ >= few.get(name, repeats):
                 continue
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.thread_time()
             for _ in range(number[name]):
                 fn()
-            best[name] = min(best[name], (time.perf_counter() - t0) / number[name])
-    return best
+            times[name].append((time.perf_counter() - t0) / number[name])
+            if cpu:
+                times[f"{name} cpu"].append((time.thread_time() - c0) / number[name])
+    return times
+
+
+def interleaved_best(
+    fns: Mapping[str, Callable[[], object]], repeats: int,
+    few: Mapping[str, int] | None = None, loop_s: float = 0.02,
+) -> dict[str, float]:
+    """Best time per call of each function over :func:`interleaved_times`' rounds."""
+    return {k: min(v) for k, v in interleaved_times(fns, repeats, few, loop_s).items()}
+
+
+def interleaved_median(
+    fns: Mapping[str, Callable[[], object]], repeats: int,
+    few: Mapping[str, int] | None = None, loop_s: float = 0.02, cpu: bool = False,
+) -> dict[str, float]:
+    """Median time per call of each function over :func:`interleaved_times`' rounds.
+
+    With ``cpu``, also the median CPU time of each (``name + " cpu"``).
+    """
+    return {k: float(np.median(v))
+            for k, v in interleaved_times(fns, repeats, few, loop_s, cpu).items()}
 
 
 def _calls_per_loop(fn: Callable[[], object], loop_s: float) -> int:

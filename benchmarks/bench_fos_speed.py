@@ -1,28 +1,41 @@
 """FOS fit time against statsmodels' Burg, sysidentpy's FROLS and scikit-learn's OMP, in one run.
 
-The data are the paper's training window: 36,000 samples (3 minutes at 200 Hz)
-of an AR-type signal.  Two signals are used: an AR(4) process (seed 000
-models accelerometer errors as AR(4); the coefficients here are our choice),
-and the first 3 minutes of the paper-like accelerometer record of
-``data_synth``.  Every time is the best of several rounds, interleaved with
-the times it is compared with (these machines are noisy); in each round a
-function runs in a loop of consecutive calls lasting at least 20 ms and its
-time is the loop's mean, as ``timeit`` does (a single fast call right after
-FROLS would pay for the caches and fresh pages FROLS left behind).  FOS is always timed
-through ``FOSModel(...).fit``: candidate generation, correlations, search and
-coefficients.
-
-Table 1, FOS against Burg at the same order L = 1, 5, 10, 20.  Burg
-(``statsmodels.regression.linear_model.burg(y, L)``) has no cross-products,
-so FOS with CP = 1 and CP = 2 at lag L are both set against Burg at order L.
-FOS runs with its default stopping rule (``korenberg``) and at full order
-(``max_terms = L``: as many weights as Burg estimates).  ``FOS ms`` is a fit
-of a candidate set fitted before in the process (the usual case in a study:
-the same orders on many records); ``1st ms`` is the first fit of a candidate
-set, which also plans its correlation tables (``fosmodel.core.shapes.layout`` and
+Every time is the median of several rounds, interleaved with the times it is
+compared with (these machines are noisy); in each round a function runs in a
+loop of consecutive calls lasting at least 20 ms and its time is the loop's
+mean, as ``timeit`` does (a single fast call right after FROLS would pay for
+the caches and fresh pages FROLS left behind).  BLAS runs on one thread (a
+FOS fit limits itself to one; Burg's dot products are faster on one thread on
+a shared 2-core machine too); ``--blas-threads`` changes it.  FOS is always timed
+through ``FOSModel(...).fit``: candidate generation, correlations, search,
+weights and their standard errors.  ``FOS ms`` is a fit of a candidate set
+fitted before in the process (the usual case in a study: the same orders on
+many records); ``1st ms`` is the first fit of a candidate set, which also plans
+its correlation tables (``fosmodel.core.shapes.layout``, ``gram_columns`` and
 ``direct_groups``, cached per candidate set like an FFT plan).
 
-Table 2, FOS against FROLS (sysidentpy) on the identical candidate set (lags
+Table 1, the small fit: FOS with L = 10 and 10 terms (``stop="max_terms"``)
+and with its default rule (``korenberg``), CP = 1 and 2, against Burg
+(``statsmodels.regression.linear_model.burg(y, 10)``) on an AR(3) record (weights
+0.5, -0.2, 0.1, the short-memory colouring of ``data_synth``'s gyro noise, driven
+by unit white noise) of 36,000 samples (3 minutes at 200 Hz, the paper's training
+window) and of 360,000 (one hour at 100 Hz).  Targets: CP = 1 at most 0.5 times
+Burg, CP = 2 at most 1.5 times, for the 10-term fits.  Ten terms of an AR(3) record
+are three true lags and seven of the 62 other candidates, most of them
+cross-products: each brings the Gram column of a product of two lags.  Its
+``CPU`` column is the ratio of the median CPU times of the same loops (this
+thread's): on a machine shared with other work the wall times also hold the
+time a process waited for a core.
+
+Table 2, FOS against Burg at the same order L = 1, 5, 10, 20 on 36,000 samples of
+an AR(4) process (seed 000 models accelerometer errors as AR(4); the weights
+here are our choice) and of the first 3 minutes of the paper-like accelerometer
+record of ``data_synth``.  Burg (``burg(y, L)``) has no cross-products, so FOS with
+CP = 1 and CP = 2 at lag L are both set against Burg at order L.  FOS runs with
+its default stopping rule and at full order (``max_terms = L``: as many weights as
+Burg estimates).
+
+Table 3, FOS against FROLS (sysidentpy) on the identical candidate set (lags
 1..L of y and their products up to CP), asked for the k terms FOS selects
 (``k`` from FOS's ``korenberg`` rule, or fixed at 10); FOS is timed with
 ``stop="max_terms", max_terms=k``.  FROLS is given the signal minus its mean,
@@ -31,7 +44,7 @@ offers the constant as one more candidate and does not centre; when it takes
 it, it shows as the term ``1``).  The table lists the terms on which the two
 differ.
 
-Table 3, FOS against orthogonal matching pursuit (scikit-learn) on the same
+Table 4, FOS against orthogonal matching pursuit (scikit-learn) on the same
 candidates, as an explicit matrix: ``fosmodel.core.candidates.evaluate_terms`` on
 the centred signal, columns centred and scaled to unit norm (OMP assumes unit
 norm), then ``OrthogonalMatchingPursuit(n_nonzero_coefs=k,
@@ -45,28 +58,47 @@ matrix here, since N > C), and ``orthogonal_mp_gram`` on a Gram matrix and
 correlated with the residual, FOS the one whose orthogonal part lowers the
 MSE most (Korenberg's Q); ``common`` counts the selected terms they share.
 
-Run: ``python benchmarks/bench_fos_speed.py [--repeats R] [--quick]``
+The figure of Table 1 goes to ``results/fos_speed.png`` and ``docs/pages/figures/``.
+
+After Table 1 it times the parts of the CP = 2, 10-term fit on 36,000 samples: the first
+batch of correlations, every Gram column, the search, and the rest of the fit.
+
+Run: ``python benchmarks/bench_fos_speed.py [--repeats R] [--quick] [--small]``
 """
 
 from __future__ import annotations
 
 import argparse
+import shutil
 import warnings
 from functools import partial
+from pathlib import Path
 
 import numpy as np
-from _common import interleaved_best, limit_blas, machine_line
+from _common import interleaved_median, limit_blas, machine_line
 from scipy.signal import lfilter
 from sklearn.linear_model import OrthogonalMatchingPursuit, orthogonal_mp_gram
 from statsmodels.regression.linear_model import burg
 
 from data_synth import make_scenario
 from fosmodel import FOSModel, fos
+from fosmodel.core.blas import one_blas_thread
 from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
-from fosmodel.core.fos import center
+from fosmodel.core.correlations import LagCorrelations
+from fosmodel.core.fos import StopRule, center, fos_search
 from fosmodel.core.shapes import clear_plans
 
 N = 36_000
+HOUR_100HZ = 360_000
+HERE = Path(__file__).resolve().parent
+FIGURES = HERE.parent / "docs" / "pages" / "figures"
+TARGETS = {1: 0.5, 2: 1.5}  # most FOS / Burg for the 10-term fits, by CP
+
+
+def ar3_signal(n: int, seed: int = 0) -> np.ndarray:
+    """AR(3) with weights 0.5, -0.2, 0.1 driven by unit white noise."""
+    e = np.random.default_rng(seed).standard_normal(n + 2000)
+    return lfilter([1.0], [1.0, -0.5, 0.2, -0.1], e)[2000:]
 
 
 def ar4_signal(seed: int = 0) -> np.ndarray:
@@ -116,8 +148,107 @@ def cold_fit(model: FOSModel, signal: np.ndarray) -> None:
     model.fit(signal)
 
 
+def small_fit_table(lengths, repeats: int) -> list[dict]:
+    print("Table 1. The small fit: AR(3), L = 10, FOS against Burg AR(10) "
+          "(targets for 10 terms: CP 1 <= 0.5, CP 2 <= 1.5)")
+    header = (f"{'N':>7} {'CP':>2} {'stop':<12} {'terms':>5} {'cross':>5} {'FOS ms':>8} "
+              f"{'1st ms':>8} {'Burg ms':>8} {'FOS/Burg':>8} {'1st/Burg':>8} {'CPU':>5}  target")
+    print(header)
+    print("-" * len(header))
+    rows = []
+    for n in lengths:
+        signal = ar3_signal(n)
+        for degree in (1, 2):
+            for stop, max_terms in (("max_terms", 10), ("korenberg", None)):
+                model = FOSModel(max_lag=10, degree=degree, stop=stop, max_terms=max_terms)
+                terms = model.fit(signal).terms_
+                med = interleaved_median({"fos": partial(model.fit, signal),
+                                          "first": partial(cold_fit, model, signal),
+                                          "burg": partial(burg, signal, 10)}, repeats, cpu=True)
+                ratio, first = med["fos"] / med["burg"], med["first"] / med["burg"]
+                cpu = med["fos cpu"] / med["burg cpu"]
+                target = TARGETS[degree] if max_terms else None
+                verdict = "" if target is None else (
+                    f"<= {target}: {'met' if ratio <= target else 'NOT met'}")
+                rule = stop if max_terms is None else f"max_terms={max_terms}"
+                rows.append(dict(n=n, degree=degree, rule=rule, ratio=ratio, first=first,
+                                 target=target, cpu=cpu))
+                print(f"{n:>7} {degree:>2} {rule:<12} {len(terms):>5} "
+                      f"{sum('*' in t or '^' in t for t in terms):>5} {med['fos'] * 1e3:>8.2f} "
+                      f"{med['first'] * 1e3:>8.2f} {med['burg'] * 1e3:>8.2f} {ratio:>8.2f} "
+                      f"{first:>8.2f} {cpu:>5.2f}  {verdict}")
+    return rows
+
+
+def small_fit_parts(repeats: int) -> None:
+    """Where the 10-term CP = 2 fit on 36,000 samples spends its time, against Burg's."""
+    signal = ar3_signal(N)
+    terms = [t for t in generate_terms(CandidateSpec(10, 2)) if not t.is_constant]
+    mean = float(signal.mean())
+    model = FOSModel(max_lag=10, degree=2, stop="max_terms", max_terms=10)
+    model.fit(signal)
+    gram = LagCorrelations(terms, {"y": signal}, 10, offsets={"y": mean})
+    gram.column(len(terms) - 1)  # every column: the one search below reads them all
+    rule = StopRule("max_terms", max_terms=10)
+
+    def first_and_columns():
+        corr = LagCorrelations(terms, {"y": signal}, 10, offsets={"y": mean})
+        corr.column(len(terms) - 1)
+
+    with one_blas_thread():
+        med = interleaved_median({
+            "fit": partial(model.fit, signal),
+            "first batch": partial(LagCorrelations, terms, {"y": signal}, 10,
+                                   offsets={"y": mean}),
+            "with all Gram columns": first_and_columns,
+            "search": partial(fos_search, gram, rule),
+            "burg": partial(burg, signal, 10)}, repeats, cpu=True)
+    cpu = {k[:-4]: v for k, v in med.items() if k.endswith(" cpu")}
+    columns = cpu["with all Gram columns"] - cpu["first batch"]
+    rest = cpu["fit"] - cpu["with all Gram columns"] - cpu["search"]
+    print(f"\nWhere the CP 2, 10-term fit on {N} samples goes (median CPU ms, same run): "
+          f"first batch (means, y and squares; 66 shapes of degree 3) "
+          f"{cpu['first batch'] * 1e3:.2f}, every Gram column (220 shapes of degree 4) "
+          f"{columns * 1e3:.2f}, search {cpu['search'] * 1e3:.2f}, the rest of the fit "
+          f"{rest * 1e3:.2f}; the fit {cpu['fit'] * 1e3:.2f}, Burg {cpu['burg'] * 1e3:.2f}")
+    fma = (66 + 220) * (N - 10)
+    print(f"the shapes' {fma / 1e6:.1f} M multiply-adds take "
+          f"{(cpu['with all Gram columns']) * 1e3:.2f} ms with the rest of the tables: "
+          f"{fma / cpu['with all Gram columns'] / 1e9:.1f} G/s")
+
+
+def small_fit_figure(rows: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 3.6))
+    labels, x = [], 0
+    for degree in (1, 2):
+        for r in (r for r in rows if r["degree"] == degree):
+            ax.bar(x - 0.2, r["ratio"], 0.4, color="#1565c0",
+                   label="later fit" if x == 0 else None)
+            ax.bar(x + 0.2, r["first"], 0.4, color="#90caf9",
+                   label="first fit of the candidate set" if x == 0 else None)
+            if r["target"] is not None:
+                ax.plot([x - 0.45, x + 0.45], [r["target"]] * 2, color="#c62828",
+                        label="target" if degree == 1 and r["n"] == rows[0]["n"] else None)
+            labels.append(f"CP {degree}, {r['rule'].replace('max_terms=', '')} terms\n"
+                          f"N = {r['n']:,}".replace("korenberg terms", "korenberg"))
+            x += 1
+    ax.axhline(1.0, color="grey", lw=0.8, ls="--")
+    ax.set_xticks(range(len(labels)), labels, fontsize=7)
+    ax.set_ylabel("FOS fit time / Burg AR(10)")
+    ax.set_title("L = 10 on an AR(3) record: median of interleaved rounds", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def burg_table(signals: dict, lags, repeats: int) -> list[float]:
-    print("Table 1. FOS against Burg at the same order L (Burg has no cross-products)")
+    print("Table 2. FOS against Burg at the same order L (Burg has no cross-products)")
     header = (f"{'signal':<7} {'L':>3} {'CP':>2} {'cands':>5} {'stop':<14} {'terms':>5} "
               f"{'FOS ms':>8} {'1st ms':>8} {'Burg ms':>8} {'FOS/Burg':>8} {'1st/Burg':>8}")
     print(header)
@@ -129,9 +260,9 @@ def burg_table(signals: dict, lags, repeats: int) -> list[float]:
                 for stop, max_terms in (("korenberg", None), ("max_terms", lag)):
                     model = FOSModel(max_lag=lag, degree=degree, stop=stop, max_terms=max_terms)
                     k = len(model.fit(signal).terms_)
-                    best = interleaved_best({"fos": partial(model.fit, signal),
-                                             "first": partial(cold_fit, model, signal),
-                                             "burg": partial(burg, signal, lag)}, repeats)
+                    best = interleaved_median({"fos": partial(model.fit, signal),
+                                               "first": partial(cold_fit, model, signal),
+                                               "burg": partial(burg, signal, lag)}, repeats)
                     ratio, first = best["fos"] / best["burg"], best["first"] / best["burg"]
                     ratios.append(ratio)
                     rule = stop if max_terms is None else f"max_terms={max_terms}"
@@ -165,7 +296,7 @@ def selection_rows(signals: dict, lags, degrees, k_rules, repeats: int, frols_re
                     on_x = fos(X, target, max_terms=k, stop="max_terms")
                     fos_x = [names[i] for i in on_x.support]
                     frols = frols_terms(centred, lag, degree, k)
-                    best = interleaved_best({
+                    best = interleaved_median({
                         "fos": partial(model.fit, signal),
                         "first": partial(cold_fit, model, signal),
                         "build": partial(omp_matrix, signal, lag, degree),
@@ -183,7 +314,7 @@ def selection_rows(signals: dict, lags, degrees, k_rules, repeats: int, frols_re
 
 
 def frols_table(rows) -> list[float]:
-    print("Table 2. FOS against FROLS (sysidentpy) on the identical candidate set, k terms each")
+    print("Table 3. FOS against FROLS (sysidentpy) on the identical candidate set, k terms each")
     header = (f"{'signal':<7} {'L':>3} {'CP':>2} {'cands':>5} {'k from':<9} {'k':>3} "
               f"{'FOS ms':>8} {'1st ms':>8} {'FROLS ms':>9} {'FROLS/FOS':>9} {'FROLS/1st':>9}"
               "  same terms")
@@ -205,7 +336,7 @@ def frols_table(rows) -> list[float]:
 
 
 def omp_table(rows) -> dict[str, list[float]]:
-    print("Table 3. FOS against OMP (scikit-learn) on the same candidates as an explicit matrix")
+    print("Table 4. FOS against OMP (scikit-learn) on the same candidates as an explicit matrix")
     header = (f"{'signal':<7} {'L':>3} {'CP':>2} {'cands':>5} {'k':>3} {'FOS ms':>8} "
               f"{'build ms':>8} {'OMP ms':>7} {'Gram ms':>7} {'mp_gram':>7} {'FOS(X)':>7} | "
               f"{'(build+OMP)/FOS':>15} {'OMP/FOS':>7} {'mp_gram/FOS':>11} "
@@ -241,19 +372,29 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--quick", action="store_true",
-                        help="smoke check: AR(4) only, fewer orders and repeats (under a minute)")
-    parser.add_argument("--blas-threads", type=int,
-                        help="limit the BLAS threads (threadpoolctl); default: as the environment")
+                        help="smoke check: 36,000 samples, fewer orders and repeats")
+    parser.add_argument("--blas-threads", type=int, default=1,
+                        help="limit the BLAS threads (threadpoolctl; 0: as the environment)")
+    parser.add_argument("--figure", type=Path, default=HERE / "results" / "fos_speed.png")
+    parser.add_argument("--small", action="store_true", help="Table 1 alone (and its figure)")
     args = parser.parse_args()
-    limit = limit_blas(args.blas_threads)  # noqa: F841 - the limit holds while it is referenced
+    limit = limit_blas(args.blas_threads or None)  # noqa: F841 - holds while referenced
     repeats = 3 if args.quick else args.repeats
     signals = {"AR(4)": ar4_signal()}
     if not args.quick:
         signals["paper"] = paper_signal()
     print(machine_line())
-    print(f"N = {N} samples; best of {repeats} interleaved rounds (FROLS: fewer), each the mean "
-          "of a loop of calls lasting at least 20 ms\n")
+    print(f"median of {repeats} interleaved rounds (FROLS: fewer), each the mean of a loop of "
+          "calls lasting at least 20 ms\n")
 
+    small = small_fit_table((N,) if args.quick else (N, HOUR_100HZ), repeats)
+    small_fit_parts(repeats)
+    if not args.quick:
+        small_fit_figure(small, args.figure)
+        shutil.copy(args.figure, FIGURES / args.figure.name)
+    if args.small:
+        return
+    print(f"\nN = {N} samples in Tables 2-4")
     burg_ratios = burg_table(signals, (1, 10) if args.quick else (1, 5, 10, 20), repeats)
     print()
     rows = selection_rows(signals, (10,) if args.quick else (10, 20), (1, 2),
@@ -263,7 +404,11 @@ def main() -> None:
     print()
     omp = omp_table(rows)
     print("\nSummary (ratios > 1 mean FOS is faster, except FOS/Burg):")
-    print(f"  FOS/Burg: {span(burg_ratios)}")
+    for r in (r for r in small if r["target"] is not None):
+        print(f"  small fit, N = {r['n']}, CP {r['degree']}, 10 terms: FOS/Burg {r['ratio']:.2f} "
+              f"(first fit {r['first']:.2f}, CPU time {r['cpu']:.2f}); target <= {r['target']}: "
+              f"{'met' if r['ratio'] <= r['target'] else 'NOT met'}")
+    print(f"  FOS/Burg at the same order: {span(burg_ratios)}")
     print(f"  FROLS/FOS: {span(frols_ratios)} (target >= 100: met in "
           f"{sum(r >= 100 for r in frols_ratios)} of {len(frols_ratios)})")
     print(f"  OMP/FOS, OMP given the matrix: {span(omp['omp'])}; with the matrix built: "

@@ -1,8 +1,11 @@
-"""The benchmarks still run: ``bench_correlations.py --quick`` end to end (no timing asserted).
+"""The benchmarks still run: ``bench_correlations.py`` and ``bench_sysidentpy.py --quick``.
 
-It exits non-zero if the fast correlation path and the point-by-point reference
-select different terms or weights that differ by more than 1e-8.  The other
-scripts' ``--quick`` runs take longer than this suite allows (run them by hand);
+``bench_correlations.py --quick`` runs end to end (no timing asserted); it exits non-zero if
+the fast correlation path and the point-by-point reference select different terms or weights
+that differ by more than 1e-8.  ``bench_sysidentpy.py --quick`` fits SysIdentPy's
+configuration with four lags instead of ten (495 candidates) and must find the system's
+terms.  The other scripts' ``--quick`` runs take longer than this suite allows (run them by
+hand);
 ``bench_distributed.py``'s study is checked to be the one it says it times.
 """
 
@@ -37,3 +40,13 @@ def test_bench_distributed_plans_the_40_fit_study_it_describes():
     assert len(plan.tasks) == 40
     assert {task.method for task in plan.tasks} == {"fos", "yw", "cov", "burg"}
     assert {task.level_tau for task in plan.tasks} == {None}
+
+
+def test_bench_sysidentpy_quick_runs_and_finds_the_true_terms():
+    pytest.importorskip("sysidentpy")
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, str(BENCH / "bench_sysidentpy.py"), "--quick"],
+                         capture_output=True, text=True, env=env, timeout=300, check=False)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "the system's three terms first in fosmodel and in FROLS: yes" in out.stdout
+    assert "candidates: fosmodel 495 (the constant included), SysIdentPy 495" in out.stdout

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from fosmodel.core import correlations
+from fosmodel.core import correlations, shapes
 from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
 from fosmodel.core.correlations import LagCorrelations
 from fosmodel.core.fos import DataCorrelations
@@ -15,6 +15,15 @@ SPECS = [
     CandidateSpec(0, 1, {"temp": 0}, columns=["sinf"]),
     CandidateSpec(8, 2, {"a": 8, "b": 0}),
 ]
+
+
+@pytest.fixture
+def one_column_at_a_time(monkeypatch):
+    """Gram columns fetched one at a time, as for candidate sets too large to take at once."""
+    monkeypatch.setattr(shapes, "_GRAM_ROWS", 0)
+    shapes.gram_columns.cache_clear()
+    yield
+    shapes.gram_columns.cache_clear()
 
 
 def _signals(n, seed):
@@ -61,7 +70,7 @@ def test_fast_path_matches_reference(spec, table_degree, n):
 
 
 @pytest.mark.parametrize("spec", [SPECS[1], SPECS[4]], ids=lambda s: f"L{s.max_lag}CP{s.degree}")
-def test_blocked_weighted_gram_matches_reference(spec, monkeypatch):
+def test_blocked_weighted_gram_matches_reference(spec, monkeypatch, one_column_at_a_time):
     # long records take the blocked weighted Gram path: force it on a short one, with blocks
     # of a few samples so that block edges fall everywhere
     monkeypatch.setattr(correlations, "_GEMM_SAMPLES", 0)
@@ -164,3 +173,77 @@ def test_offsets_give_the_sums_of_the_centred_signals_to_the_bit(spec, blocked, 
         np.testing.assert_array_equal(lazy.column(j), eager.column(j))
     if blocked:  # the caller's arrays themselves, no centred copies
         assert all(any(np.shares_memory(u, v) for v in signals.values()) for u in lazy._signals)
+
+
+@pytest.fixture
+def pair_steps_everywhere(monkeypatch):
+    """Every new shape of degree 4 summed as pair steps, in chunks and spans of a few samples."""
+    monkeypatch.setattr(shapes, "_PAIR_SHAPES", 1)
+    monkeypatch.setattr(correlations, "_PAIR_CHUNK", 5)
+    monkeypatch.setattr(correlations, "_PAIR_SPAN", 13)
+    monkeypatch.setattr(correlations, "_PAIR_VALUES", 40)
+    shapes.clear_plans()
+    yield
+    shapes.clear_plans()
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=lambda s: f"L{s.max_lag}CP{s.degree}")
+@pytest.mark.parametrize("table_degree", [3, 4])
+@pytest.mark.parametrize("n", [None, 300])
+def test_pair_steps_match_reference(spec, table_degree, n, pair_steps_everywhere):
+    n = n or spec.lag_window + 3
+    signals = _signals(n, 7)
+    terms = [t for t in generate_terms(spec) if not t.is_constant]
+    n0 = spec.lag_window
+    fast = LagCorrelations(terms, signals, n0, table_degree=table_degree)
+    ref = DataCorrelations(evaluate_terms(terms, signals, n0), signals["y"][n0:])
+    _assert_matches(fast, ref)
+
+
+def test_pair_steps_in_blocked_windows_with_offsets_match_reference(pair_steps_everywhere,
+                                                                     monkeypatch):
+    monkeypatch.setattr(correlations, "_BLOCKED_SAMPLES", 0)
+    monkeypatch.setattr(correlations, "_BLOCK", 11)
+    spec = SPECS[4]
+    signals = _signals(200, 8)
+    offsets = {k: float(v.mean()) for k, v in signals.items()}
+    centred = {k: v - offsets[k] for k, v in signals.items()}
+    terms = [t for t in generate_terms(spec) if not t.is_constant]
+    n0 = spec.lag_window
+    fast = LagCorrelations(terms, signals, n0, offsets=offsets)
+    ref = DataCorrelations(evaluate_terms(terms, centred, n0), centred["y"][n0:])
+    _assert_matches(fast, ref)
+
+
+def test_pair_steps_plan_each_shape_as_head_times_moved_tail():
+    # y[t] x[t-1] * (y[t-2] x[t-4]): head (y, x, 1), tail the pair (y, x, 2) moved 2 samples;
+    # x[t] y[t-3] y[t-3] x[t-4] (factors out of shift order): head (x, y, 3), tail (y, x, 1)
+    ch = np.array([[0, 1, 0, 1], [0, 0, 1, 1]])
+    rel = np.array([[0, 1, 2, 4], [3, 3, 0, 4]])
+    steps = shapes.pair_steps(ch, rel, np.array([0, 1]))
+    pairs = [tuple(p) for p in steps.pairs.tolist()]
+    assert pairs == sorted(pairs, key=lambda p: p[2])
+    by_shape = {int(s): (q, pairs[h_lo + h], pairs[t_lo + t])
+                for q, h_lo, _, t_lo, _, shp, hh, tt in steps.steps for s, h, t in zip(shp, hh, tt)}
+    assert by_shape == {0: (2, (0, 1, 1), (0, 1, 2)), 1: (3, (1, 0, 3), (0, 1, 1))}
+
+
+def test_gram_columns_at_once_equal_them_one_at_a_time(monkeypatch):
+    spec = SPECS[1]
+    signals = _signals(700, 9)
+    terms = [t for t in generate_terms(spec) if not t.is_constant]
+    n0 = spec.lag_window
+    at_once = LagCorrelations(terms, signals, n0)
+    nonlinear = next(j for j, t in enumerate(terms) if t.degree == 2)
+    first = at_once.column(nonlinear)
+    assert len(at_once._columns) == len(terms)  # every column came with the first
+    monkeypatch.setattr(shapes, "_GRAM_ROWS", 0)
+    shapes.gram_columns.cache_clear()
+    try:
+        one = LagCorrelations(terms, signals, n0)
+        np.testing.assert_allclose(first, one.column(nonlinear), rtol=1e-12, atol=1e-14)
+        for j in range(len(terms)):
+            np.testing.assert_allclose(at_once.column(j), one.column(j), rtol=1e-12, atol=1e-14)
+        assert len(one._columns) < len(terms)
+    finally:
+        shapes.gram_columns.cache_clear()

@@ -26,7 +26,7 @@ from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import solve_triangular
+from scipy.linalg.lapack import dtrtrs
 
 from .exceptions import InputError
 
@@ -298,8 +298,13 @@ def fos_search(
 
     active = np.ones(n_cand, dtype=bool)
     dependent = np.zeros(n_cand, dtype=bool)
+    newly = np.empty(n_cand, dtype=bool)
     live_floor = floor.copy()  # floor, -inf once a candidate is selected or dependent
-    q_all = np.full(n_cand, -np.inf)  # Q of the active candidates, -inf for the others
+    # D(c,c) of a selected or dependent candidate is set to inf: its Q is then 0, never
+    # above an active candidate's unless no candidate reduces the MSE (then the search
+    # stops whichever it picks), so Q needs no mask
+    q_all = np.empty(n_cand)
+    c_sq = np.empty(n_cand)
     d_hist = np.empty((max(cap, 0), n_cand))  # D(c, r) for each selected r
     a_hist = np.empty((max(cap, 0), n_cand))  # alpha_cr = D(c, r) / D(r, r)
     support: list[int] = []
@@ -313,16 +318,17 @@ def fos_search(
         if stop.reached(mse, mse_null, corr.y_mean_sq):
             reason = stop.kind
             break
-        newly = d_rem <= live_floor
-        if newly.any():
+        # the bookkeeping of a step is a few calls on arrays of C: on small sets their
+        # overhead is the cost, so they reuse buffers and count instead of any()
+        if np.count_nonzero(np.less_equal(d_rem, live_floor, out=newly)):
             dependent |= newly
             active &= ~newly
-            live_floor[newly] = q_all[newly] = -np.inf
-            if not active.any():
+            live_floor[newly], d_rem[newly] = -np.inf, np.inf
+            if not np.count_nonzero(active):
                 reason = "exhausted"
                 break
-        np.divide(c_rem * c_rem, d_rem, out=q_all, where=active)
-        j = int(np.argmax(q_all))
+        np.divide(np.multiply(c_rem, c_rem, out=c_sq), d_rem, out=q_all)
+        j = int(q_all.argmax())
         q = float(q_all[j])
         mse_new = max(mse - q, 0.0)
         if q <= 0.0:
@@ -335,17 +341,16 @@ def fos_search(
             reason = stop.kind
             break
         r = len(support)
-        d_col = corr.column(j) - means * means[j]
+        d_col = np.subtract(corr.column(j), means * means[j], out=d_hist[r])
         if r:
             d_col -= a_hist[:r].T @ d_hist[:r, j]  # eq. 19
-        d_jj = d_col[j]
-        active[j], live_floor[j], q_all[j] = False, -np.inf, -np.inf
+        d_jj = float(d_col[j])
+        active[j], live_floor[j], d_rem[j] = False, -np.inf, np.inf
         if not d_jj > floor[j]:  # fresher than d_rem[j]; guard rounding
             dependent[j] = True
             continue
-        d_hist[r] = d_col
         alpha = np.divide(d_col, d_jj, out=a_hist[r])  # eq. 20
-        g_j = c_rem[j] / d_jj  # eq. 23
+        g_j = float(c_rem[j]) / d_jj  # eq. 23
         d_rem -= alpha * d_col
         c_rem -= alpha * c_rem[j]
         support.append(j)
@@ -361,8 +366,7 @@ def fos_search(
     g_arr = np.asarray(g)
     # eqs. 24-25: a = A^{-T} g with A the unit lower-triangular matrix of alpha_{s_i, s_r}
     alpha_sel = a_hist[:m, sel].T if m else np.empty((0, 0))
-    coef = (solve_triangular(alpha_sel.T, g_arr, lower=False, unit_diagonal=True,
-                             check_finite=False) if m else g_arr)
+    coef = _solve_unit_triangular(alpha_sel.T, g_arr, lower=False) if m else g_arr
     a0 = float(y_mean - means[sel] @ coef) if intercept else 0.0
     coef_se, intercept_se = _std_errors(alpha_sel, d_hist[np.arange(m), sel], means[sel],
                                         mse, n, intercept)
@@ -374,6 +378,25 @@ def fos_search(
         criterion_path=np.asarray(ic_path) if stop.kind in _CRITERIA else None,
         coef_se=coef_se, intercept_se=intercept_se,
     )
+
+
+def _solve_unit_triangular(a: np.ndarray, b: np.ndarray, lower: bool) -> np.ndarray:
+    """Solve ``a x = b`` for a unit-diagonal triangular ``a`` (upper unless ``lower``).
+
+    LAPACK's ``dtrtrs`` called as ``scipy.linalg.solve_triangular`` calls it (on
+    ``a``, or on its transpose when ``a`` is not Fortran-ordered: the same solution
+    to the bit), without its checks and wrappers, which cost more than the solve
+    for the few terms a search selects.
+    """
+    if not b.size:  # no term selected
+        return np.empty_like(b)
+    if a.flags.f_contiguous:
+        x, info = dtrtrs(a, b, lower=int(lower), trans=0, unitdiag=1)
+    else:
+        x, info = dtrtrs(a.T, b, lower=int(not lower), trans=1, unitdiag=1)
+    if info:  # a unit diagonal is never singular; only a broken argument gets here
+        raise ValueError(f"dtrtrs failed with info = {info}")
+    return x
 
 
 def _std_errors(
@@ -393,8 +416,7 @@ def _std_errors(
     if dof <= 0:
         return np.full(m, np.nan), math.nan
     per_n = mse / dof  # s^2 / N
-    inv_a = solve_triangular(alpha, np.eye(m), lower=True, unit_diagonal=True,
-                             check_finite=False)
+    inv_a = _solve_unit_triangular(alpha, np.eye(m), lower=True)
     scaled = inv_a / np.sqrt(d)[:, None]  # diag(d)^-1/2 W: S^-1 = scaled^T scaled
     coef_se = np.sqrt(per_n * np.einsum("ri,ri->i", scaled, scaled))
     if not intercept:
@@ -433,8 +455,9 @@ def deferred_center(a: np.ndarray) -> tuple[np.ndarray, float, float]:
 def _constant_columns(cols: np.ndarray) -> np.ndarray:
     """Which columns of the 2-D, non-empty ``cols`` hold one value exactly (a boolean mask)."""
     constant = cols[0] == cols[-1]  # a column whose ends differ varies: no need to scan it
-    maybe = np.flatnonzero(constant)
-    constant[maybe] = np.ptp(cols[:, maybe], axis=0) == 0
+    if constant.any():
+        maybe = np.flatnonzero(constant)
+        constant[maybe] = np.ptp(cols[:, maybe], axis=0) == 0
     return constant
 
 

@@ -12,7 +12,7 @@ of the batch every fit starts with is made once per candidate set
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import ClassVar
 
@@ -21,6 +21,8 @@ import numpy as np
 from .candidates import OUTPUT, Factor
 
 _BLOCK = 8192  # most moments in the Gram columns of linear candidates tabulated at once
+_PAIR_SHAPES = 64  # fewest new shapes of degree 4 summed as pair steps
+_GRAM_ROWS = 2**16  # most moments in the Gram columns of nonlinear candidates tabulated at once
 
 
 @dataclass(frozen=True)
@@ -131,12 +133,90 @@ def lookup(keys: np.ndarray, table_keys: np.ndarray, table_slots: np.ndarray) ->
 
 
 @dataclass(frozen=True)
-class NewShapes:
-    """Shapes a batch adds to the tables, as rows ``base, base + 1, ...``."""
+class PairSteps:
+    """How a batch's new shapes of degree 4 are summed: products of pair products.
 
-    groups: dict  # Geometry.group_by_prefix of their codes
+    Sorted by lag shift, a shape's factors are a *head*, its first two (the first at
+    shift 0), and a *tail*, its last two, moved ``q`` samples (the shift of the third):
+
+        sum_t z_h(t) z_k(t - q),   z(s) = u_c1(s) u_c2(s - d),
+
+    the pair products ``z`` being the rows ``pairs`` = ``(c1, c2, d)``, sorted by ``d``.
+    Each step ``(q, h_lo, h_hi, t_lo, t_hi, shapes, h, t)`` is one matrix product of the
+    rows ``h_lo..h_hi-1`` (heads) with the rows ``t_lo..t_hi-1`` moved ``q`` samples
+    (tails); the new shapes ``shapes`` are its entries ``(h, t)`` (relative to ``h_lo``,
+    ``t_lo``).  A head needs ``d <= q`` and a tail ``d <= N0 - q``, so each step's rows
+    are the first ones and its products read only samples of the record.
+    """
+
+    pairs: np.ndarray
+    steps: tuple[tuple[int, int, int, int, int, np.ndarray, np.ndarray, np.ndarray], ...]
+
+
+@dataclass(frozen=True)
+class NewShapes:
+    """Shapes a batch adds to the tables, as rows ``base, base + 1, ...``.
+
+    Those in :class:`PairSteps` are summed as they say, the others by the groups of their
+    leading factors.
+    """
+
+    groups: dict  # Geometry.group_by_prefix of the codes of the shapes not in pair steps
     ch: np.ndarray  # Geometry.factor_index of their codes
     rel: np.ndarray
+    pair_steps: PairSteps | None
+
+
+def new_shapes(geo: Geometry, codes: np.ndarray) -> NewShapes:
+    """Plan the sums of the new shapes with these (sorted) codes: pair steps and groups.
+
+    Shapes of degree 4 are pair steps when there are at least ``_PAIR_SHAPES`` of them:
+    a few are cheaper as a prefix product and a correlation each.
+    """
+    ch, rel = geo.factor_index(codes)
+    paired = (codes > 0).sum(axis=1) == 4
+    if paired.sum() < _PAIR_SHAPES:
+        paired[:] = False
+    rest = np.flatnonzero(~paired)
+    groups = geo.group_by_prefix(codes[rest]) if len(rest) else {}
+    for by_last in groups.values():
+        for key, (rows, rels) in by_last.items():
+            by_last[key] = (rest[rows], rels)
+    # the present factors come last among the sorted codes: move them first for pair steps
+    present = np.argsort(codes == 0, axis=1, kind="stable")
+    steps = (pair_steps(np.take_along_axis(ch, present, 1), np.take_along_axis(rel, present, 1),
+                        np.flatnonzero(paired)) if paired.any() else None)
+    return NewShapes(groups, ch, rel, steps)
+
+
+def pair_steps(ch: np.ndarray, rel: np.ndarray, shapes: np.ndarray) -> PairSteps:
+    """Plan the shapes ``shapes`` (rows of ``ch``, ``rel``, four factors first) as pair steps."""
+    c, r = ch[shapes, :4], rel[shapes, :4]
+    order = np.argsort(r * (ch.max() + 1) + c, axis=1, kind="stable")  # by shift
+    c, r = np.take_along_axis(c, order, 1), np.take_along_axis(r, order, 1)
+    heads = np.column_stack([c[:, 0], c[:, 1], r[:, 1]])
+    tails = np.column_stack([c[:, 2], c[:, 3], r[:, 3] - r[:, 2]])
+    q = r[:, 2]
+    pairs = np.unique(np.vstack([heads, tails]), axis=0)
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0], pairs[:, 2]))]  # by shift d
+    head_row, tail_row = _row_of(pairs, heads), _row_of(pairs, tails)
+    steps = []
+    for lag in np.unique(q).tolist():
+        at = np.flatnonzero(q == lag)
+        h, t = head_row[at], tail_row[at]
+        h_lo, t_lo = int(h.min()), int(t.min())
+        entries = (shapes[at], h - h_lo, t - t_lo)
+        for a in entries:
+            a.flags.writeable = False
+        steps.append((lag, h_lo, int(h.max()) + 1, t_lo, int(t.max()) + 1, *entries))
+    pairs.flags.writeable = False
+    return PairSteps(pairs, tuple(steps))
+
+
+def _row_of(table: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Index in ``table`` of each row of ``rows`` (every one of which is in ``table``)."""
+    keys = {tuple(row): i for i, row in enumerate(table.tolist())}
+    return np.array([keys[tuple(row)] for row in rows.tolist()], dtype=np.intp)
 
 
 @dataclass(frozen=True)
@@ -178,7 +258,7 @@ def plan_batch(geo: Geometry, ch: np.ndarray, lag: np.ndarray, lmin: np.ndarray 
         if fresh.any():
             uniq, first = np.unique(keys[fresh], return_index=True)
             codes = codes[fresh][first]
-            new = NewShapes(geo.group_by_prefix(codes), *geo.factor_index(codes))
+            new = new_shapes(geo, codes)
             base = len(table_keys)
             all_keys = np.concatenate([table_keys, uniq])
             all_slots = np.concatenate([table_slots, base + np.arange(len(uniq))])
@@ -295,10 +375,55 @@ def layout(factors: tuple[tuple[Factor, ...], ...], n0: int, table_degree: int) 
     return out
 
 
+@dataclass(frozen=True)
+class GramColumns:
+    """The batch of the Gram columns of every nonlinear candidate (:func:`gram_columns`).
+
+    ``columns``: the candidates j whose columns it holds, ``len(columns)`` blocks of one row
+    per candidate c, in order; ``rows``: their (channel, lag) factors, c's then j's.
+    """
+
+    columns: np.ndarray
+    rows: tuple[np.ndarray, np.ndarray]
+    batch: Batch
+
+
+@lru_cache(maxsize=16)
+def gram_columns(factors: tuple[tuple[Factor, ...], ...], n0: int,
+                 table_degree: int) -> GramColumns | None:
+    """Plan every Gram column the first batch of :func:`layout` leaves out, as one batch.
+
+    When a search first asks for the column of a nonlinear candidate, the moments of all
+    those columns are tabulated together, if the candidates are products of at most two
+    factors (the moments have at most four, all tabulated: the shapes of degree 4 over the
+    lags, 220 at L = 10 and 1,540 at L = 20, as pair steps) and the columns hold at most
+    ``_GRAM_ROWS`` moments (at L = 20 on 36,000 samples, three cross-products in a search
+    already cost more one column at a time).
+    Otherwise (None) the search fetches the columns one at a time.  Planned against the
+    tables of the first batch, as the search finds them at that point.  Cached.
+    """
+    plan = layout(factors, n0, table_degree)
+    k, width = plan.ch.shape
+    columns = np.setdiff1d(np.arange(k), plan.linear)
+    geo = replace(plan.geometry, table_degree=4)
+    if (width > 2 or not 0 < len(columns) * k <= _GRAM_ROWS
+            or not np.array_equal(geo.radix, plan.geometry.radix)):
+        return None
+    ch = np.hstack([np.tile(plan.ch, (len(columns), 1)), np.repeat(plan.ch[columns], k, axis=0)])
+    lag = np.hstack([np.tile(plan.lag, (len(columns), 1)),
+                     np.repeat(plan.lag[columns], k, axis=0)])
+    batch = plan_batch(geo, ch, lag, None, plan.first.keys, plan.first.slots)
+    for a in (columns, ch, lag, *_arrays(batch)):
+        a.flags.writeable = False
+    return GramColumns(columns, (ch, lag), batch)
+
+
 def _arrays(batch: Batch) -> list[np.ndarray]:
     arrays = [batch.lmin, batch.table, batch.slot, batch.keys, batch.slots]
     if batch.new is not None:
         arrays += [batch.new.ch, batch.new.rel]
+        if batch.new.pair_steps is not None:
+            arrays.append(batch.new.pair_steps.pairs)
     return arrays
 
 
@@ -369,4 +494,5 @@ def _direct_groups(ch_bytes: bytes, lag_bytes: bytes, shape: tuple[int, int]) ->
 def clear_plans() -> None:
     """Forget the cached layouts and direct groups (to time a first fit, as benchmarks do)."""
     layout.cache_clear()
+    gram_columns.cache_clear()
     _direct_groups.cache_clear()

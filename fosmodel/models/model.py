@@ -40,7 +40,7 @@ from ..core.candidates import (
     evaluate_terms,
     generate_terms,
 )
-from ..core.correlations import LagCorrelations, PooledCorrelations
+from ..core.correlations import LagCorrelations, PooledCorrelations, fast_correlations
 from ..core.derived import channels_read, derive, is_derived
 from ..core.exceptions import FitWarning, InputError
 from ..core.fos import (
@@ -300,7 +300,7 @@ class FOSModel(BaseEstimator):
                 f"window (after the lag window of {n0}) for {n_cand} candidates; FOS needs "
                 f"at least {n_cand + 2} to tell them apart: lower the lag, the degree or the "
                 "channels, or give a longer record")
-        if np.ptp(y_arr) == 0:
+        if y_arr[0] == y_arr[-1] and np.ptp(y_arr) == 0:  # ends that differ need no scan
             raise InputError(f"y is constant ({y_arr[0]:g}): there is nothing to model")
         channels = as_channels(exog, [*spec.exog_lags, *spec.columns], len(y_arr))
         _refuse_own_input(y_arr, channels)
@@ -312,7 +312,7 @@ class FOSModel(BaseEstimator):
         corr: Correlations
         if self.correlations == "fast":
             with one_blas_thread():  # short products: threads cost more than they give
-                parts = [LagCorrelations(terms, piece, n0, offsets=pending) for piece in pieces]
+                parts = [fast_correlations(terms, piece, n0, offsets=pending) for piece in pieces]
                 corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
                 res = fos_search(corr, rule, intercept=True,
                                   dependence_tol=self.dependence_tol)
