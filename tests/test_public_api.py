@@ -1,0 +1,96 @@
+"""The public API: every package declares its names.
+
+A package's public names are its ``__all__``, imported on first use (``fosmodel._lazy``):
+the ``if TYPE_CHECKING:`` imports type checkers read, the table ``attach`` imports from and
+``__all__`` must name the same things, each must resolve, and none may be the name of a
+module of its package (importing that module would hide it).
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "fosmodel"
+#: Every package of fosmodel, by dotted name.
+PACKAGES = sorted(".".join(p.parent.relative_to(ROOT).parts) for p in PACKAGE.rglob("__init__.py"))
+#: Modules at the top of the package that a user imports from (the others are private).
+TOP_MODULES = ("fosmodel.demo",)
+#: Packages whose names are imported on first use (the command line's imports its parser).
+LAZY = [p for p in PACKAGES if p != "fosmodel.cli"]
+
+
+def _tree(package: str) -> ast.Module:
+    return ast.parse((ROOT.joinpath(*package.split(".")) / "__init__.py").read_text())
+
+
+def _type_checking_names(tree: ast.Module) -> dict[str, set[str]]:
+    """The names the ``if TYPE_CHECKING:`` block imports, by relative module."""
+    block = next(node for node in tree.body if isinstance(node, ast.If)
+                 and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING")
+    names: dict[str, set[str]] = {}
+    for node in block.body:
+        assert isinstance(node, ast.ImportFrom) and node.level == 1, ast.unparse(node)
+        names.setdefault(node.module or "", set()).update(a.name for a in node.names)
+    return names
+
+
+def _attached_names(tree: ast.Module) -> dict[str, set[str]]:
+    """The table the package gives ``attach``."""
+    call = next(node for node in ast.walk(tree) if isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Name) and node.func.id == "attach")
+    return {module: set(names) for module, names in ast.literal_eval(call.args[1]).items()}
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_every_package_declares_its_public_names(package):
+    module = importlib.import_module(package)
+    assert module.__all__ and len(set(module.__all__)) == len(module.__all__)
+    missing = [name for name in module.__all__ if not hasattr(module, name)]
+    assert not missing, f"{package}.__all__ names what it does not hold: {missing}"
+
+
+@pytest.mark.parametrize("package", LAZY)
+def test_type_checkers_the_lazy_table_and_all_name_the_same_things(package):
+    tree = _tree(package)
+    typed, attached = _type_checking_names(tree), _attached_names(tree)
+    assert typed == attached
+    module = importlib.import_module(package)
+    public = set(module.__all__) - {"__version__"}
+    assert public == {name for names in attached.values() for name in names}
+    assert dir(module) == sorted(module.__all__)
+
+
+@pytest.mark.parametrize("package", LAZY)
+def test_no_public_name_is_hidden_by_a_module_of_its_package(package):
+    folder = ROOT.joinpath(*package.split("."))
+    modules = {p.stem for p in folder.glob("*.py")} | {p.name for p in folder.iterdir()
+                                                       if (p / "__init__.py").is_file()}
+    assert not set(importlib.import_module(package).__all__) & modules
+
+
+def test_a_package_s_names_are_imported_when_first_used():
+    heavy = ("sklearn", "statsmodels", "matplotlib", "pandas", "scipy")
+    code = (f"import sys, {', '.join(LAZY)}\n"
+            f"print(sorted(m for m in sys.modules if m.split('.')[0] in {heavy!r}))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
+    code = ("import sys; from fosmodel.io import SplitSpec\n"
+            "print(sorted(m for m in sys.modules if m.startswith('fosmodel.io.')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "['fosmodel.io.split']"
+
+
+def test_an_unknown_name_is_an_attribute_error():
+    import fosmodel.io
+
+    with pytest.raises(AttributeError, match="module 'fosmodel.io' has no attribute 'load'"):
+        fosmodel.io.load  # noqa: B018
