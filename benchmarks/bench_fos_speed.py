@@ -62,9 +62,7 @@ from statsmodels.regression.linear_model import burg
 
 from data_synth import make_scenario
 from fosmodel import FOSModel, fos
-from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
-from fosmodel.core.fos import center
-from fosmodel.core.shapes import clear_plans
+from fosmodel.core import CandidateSpec, center, clear_plans, evaluate_terms, generate_terms
 
 N = 36_000
 

@@ -52,19 +52,17 @@ from kalman_static import (
 )
 from matplotlib.figure import Figure
 
-from fosmodel.filter.allan_statespace import (
+from fosmodel.filter import (
+    StateSpace,
     allan_state_space,
     initial_covariance,
     model_adev,
     model_terms,
+    to_state_space,
 )
-from fosmodel.filter.statespace import StateSpace, to_state_space
-from fosmodel.io.loader import load_record
-from fosmodel.io.output import save_figure, write_tables
-from fosmodel.noise.allan import allan_deviation
-from fosmodel.noise.allan_fit import NoiseFit, fit_noise
-from fosmodel.noise.metrics import STANDARD_GRAVITY
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel.io import load_record, save_figure, write_tables
+from fosmodel.noise import STANDARD_GRAVITY, NoiseFit, allan_deviation, fit_noise
+from fosmodel.typeset import markdown_table
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

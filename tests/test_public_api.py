@@ -1,4 +1,5 @@
-"""The public API: every package declares its names.
+"""The public API: every package declares its names, and the studies, docs and benchmarks use
+only those.
 
 A package's public names are its ``__all__``, imported on first use (``fosmodel._lazy``):
 the ``if TYPE_CHECKING:`` imports type checkers read, the table ``attach`` imports from and
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -94,3 +96,54 @@ def test_an_unknown_name_is_an_attribute_error():
 
     with pytest.raises(AttributeError, match="module 'fosmodel.io' has no attribute 'load'"):
         fosmodel.io.load  # noqa: B018
+
+
+# What the studies, the docs pages, the README and the benchmarks import
+
+#: ``from fosmodel... import a, b`` (one line or parenthesised) and ``import fosmodel...``,
+#: in a script or a page, after the prompts of a console example are taken off.
+FROM_IMPORT = re.compile(r"^[ \t]*from[ \t]+(fosmodel[\w.]*)[ \t]+import[ \t]+(\([^)]*\)|.*)$",
+                         re.MULTILINE)
+PLAIN_IMPORT = re.compile(r"^[ \t]*import[ \t]+(fosmodel[\w.]*)", re.MULTILINE)
+PROMPT = re.compile(r"^([ \t]*)(>>>|\.\.\.) ?", re.MULTILINE)
+CLIENTS = sorted([*ROOT.glob("studies/*.py"), *ROOT.glob("benchmarks/*.py"),
+                  *ROOT.glob("docs/*.py"), *ROOT.glob("docs/pages/*.md"), ROOT / "README.md"])
+
+
+def _imports(text: str) -> list[tuple[str, str]]:
+    """Every ``(module, name)`` imported from fosmodel, ``(module, "")`` for ``import module``."""
+    text = PROMPT.sub(r"\1", text)
+    found = [(m, "") for m in PLAIN_IMPORT.findall(text)]
+    for module, names in FROM_IMPORT.findall(text):
+        for name in names.split("#")[0].strip("()").replace("\n", " ").split(","):
+            if name.split():
+                found.append((module, name.split()[0]))
+    return found
+
+
+def _public(module: str, name: str) -> bool:
+    if module not in PACKAGES and module not in TOP_MODULES:
+        return False
+    if not name:  # ``import fosmodel.io``: a package
+        return module in PACKAGES
+    return name in importlib.import_module(module).__all__
+
+
+def test_the_client_scanner_reads_every_form_of_import():
+    text = ("from fosmodel import FOSModel, fos  # a comment\n"
+            ">>> from fosmodel.core import (\n...     Term,\n...     layout,\n... )\n"
+            "    import fosmodel.models.model  # noqa\n"
+            "from fosmodel.io.loader import load_record as load\n")
+    assert _imports(text) == [
+        ("fosmodel.models.model", ""), ("fosmodel", "FOSModel"), ("fosmodel", "fos"),
+        ("fosmodel.core", "Term"), ("fosmodel.core", "layout"),
+        ("fosmodel.io.loader", "load_record")]
+    assert [_public(m, n) for m, n in _imports(text)] == [False, True, True, True, True, False]
+
+
+@pytest.mark.parametrize("path", CLIENTS, ids=lambda p: str(p.relative_to(ROOT)))
+def test_studies_docs_and_benchmarks_use_only_public_names(path):
+    wrong = [f"{module}: {name}" if name else module
+             for module, name in _imports(path.read_text()) if not _public(module, name)]
+    assert not wrong, (f"{path.relative_to(ROOT)} imports names no package declares public "
+                       f"(import them from the package, or add them to its __all__): {wrong}")
