@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import importlib.util
 import re
 import subprocess
 import sys
@@ -147,3 +148,12 @@ def test_studies_docs_and_benchmarks_use_only_public_names(path):
              for module, name in _imports(path.read_text()) if not _public(module, name)]
     assert not wrong, (f"{path.relative_to(ROOT)} imports names no package declares public "
                        f"(import them from the package, or add them to its __all__): {wrong}")
+
+
+def test_the_api_page_lists_every_public_name_as_the_packages_give_it():
+    spec = importlib.util.spec_from_file_location("api_page", ROOT / "docs" / "api_page.py")
+    api_page = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(api_page)
+    current = api_page.PAGE.read_text(encoding="utf-8")
+    assert set(api_page.PACKAGES) == set(PACKAGES)
+    assert current == api_page.page_text(current), "run: python docs/api_page.py"
