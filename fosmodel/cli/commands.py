@@ -33,6 +33,7 @@ from ..io.output import (
 )
 from ..models.model import FOSModel
 from ..noise.axes import SENSORS, Axis, resolve_axes
+from .flags import with_flags
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
@@ -47,7 +48,7 @@ def _load(args: argparse.Namespace, path: str | None = None,
                       outliers=args.outliers, gaps=args.gaps, topic=args.topic,
                       temperature_topic=args.temperature_topic)
     for note in rec.notes:
-        print(f"fosmodel: note: {path + ': ' if path else ''}{note}", file=sys.stderr)
+        print(f"fosmodel: note: {path + ': ' if path else ''}{with_flags(note)}", file=sys.stderr)
     return rec
 
 

@@ -187,7 +187,7 @@ def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None,
     names = [spec.split(":")[0] for spec in columns]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
-        raise InputError(f"column {twice[0]!r} is named twice in --columns")
+        raise InputError(f"column {twice[0]!r} is named twice in columns=")
     if not names:
         raise InputError("no columns to analyse")
     stray = [c for c in given.columns if c not in names]
