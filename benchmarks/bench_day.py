@@ -27,8 +27,8 @@ reuses them on the next run).  On its ``gx_dps`` axis:
 * the model-order study of the whole day (``run_study``: orders 1-10, CP 1-2,
   every method, both protocols, the CLI's default 180 s + 180 s split).
 
-Targets (issue 20): fit < 30 s and < 2 GB peak; Allan < 15 s; study and loop
-< 2 min each.  Writes a text table and a log-log figure.
+Targets, so that a day's recording is practical on a laptop: fit < 30 s and < 2 GB
+peak; Allan < 15 s; study and loop < 2 min each.  Writes a text table and a log-log figure.
 
 Run: ``python benchmarks/bench_day.py [--quick] [--data DIR] [--out PATH]``
 """

@@ -42,7 +42,7 @@ from fosmodel.study import local_client
 from fosmodel.workflows import MARKER, FleetConfig, ImuConfig, record_name, run_fleet
 
 HERE = Path(__file__).resolve().parent
-FLEET = 100  # the fleet of issue 20: 100 sessions of a few minutes
+FLEET = 100  # a lab's fleet: 100 sessions of a few minutes
 ADIS = HERE.parent.parent / "shared" / "data" / "adis16405"
 
 

@@ -1,4 +1,4 @@
-"""Allan variance noise fit on a gyro with known ARW and RRW (issue 9, part 3; seed 004).
+"""Allan variance noise fit on a gyro with known ARW and RRW (seed 004).
 
 Twelve hours of gyro 1 of the ``gyro_array_8`` scenario at 102.4 Hz with seed 004's typical
 values (eq. 5.4: ARW 0.068 deg/sqrt(s), RRW 0.00029 deg/sqrt(s^3)); the overlapping Allan

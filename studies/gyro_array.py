@@ -1,4 +1,4 @@
-"""Arrays of gyros measuring one rate (issue 9, part 5; seed 004 chapters 6-10).
+"""Arrays of gyros measuring one rate (seed 004 chapters 6-10).
 
 1. Seed 004's closed-form averaging drift (Tables 10.1-10.2, eqs. 7.13-7.16).
 2. The steady-state Kalman gain of the virtual-gyro filter: the three-gyro example of eq. 8.8

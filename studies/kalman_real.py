@@ -1,6 +1,7 @@
 """From Allan to a filter: the Allan-derived error model beside GM, AR and FOS on real records.
 
-Issue 17 part 5.  The accelerometers x, y and z of the six static ADIS16405 sessions (18
+Whether the error model read off an Allan fit serves a filter as well as the fitted ones do.
+The accelerometers x, y and z of the six static ADIS16405 sessions (18
 axes, ``../shared/data/adis16405``) are converted from g to m/s^2 (9.80665) and block-averaged
 from 100 Hz to 20 Hz (means of 5 samples: the rate of ``kalman_static.py``, whose fits and
 filter this study imports).  Each axis is split in halves of 100,000 samples (1.39 h).

@@ -1,4 +1,4 @@
-"""Temperature-dependent error models of the chamber records (issue 9, part 4; seed 001).
+"""Temperature-dependent error models of the chamber records (seed 001).
 
 For ``temp_chamber_gyro`` (seed 0) and ``temp_chamber_accel`` (seed 1): the plateaus of the
 temperature column, the error model per plateau (bias, Allan white-noise coefficient, AR(1)
