@@ -157,3 +157,44 @@ def test_the_api_page_lists_every_public_name_as_the_packages_give_it():
     current = api_page.PAGE.read_text(encoding="utf-8")
     assert set(api_page.PACKAGES) == set(PACKAGES)
     assert current == api_page.page_text(current), "run: python docs/api_page.py"
+
+
+# The developers' guide and the README describe the layers as the code has them
+
+GUIDE = (ROOT / "DEVELOPERS.md").read_text(encoding="utf-8")
+
+
+def _diagram() -> dict[str, list[str]]:
+    """Each layer of the guide's diagram and the public names it shows."""
+    block = GUIDE.split("```text\n", 1)[1].split("```", 1)[0]
+    rows = (re.match(r"(\w+) {2,}(\w.*)$", line) for line in block.splitlines())
+    return {row[1]: [name.strip() for name in row[2].split(",")] for row in rows if row}
+
+
+def test_the_guide_s_diagram_shows_every_layer_with_names_it_exports():
+    diagram = _diagram()
+    assert set(diagram) == {p.rpartition(".")[2] for p in PACKAGES}
+    wrong = [f"{layer}: {name}" for layer, names in diagram.items() for name in names
+             if name not in importlib.import_module(
+                 "fosmodel" if layer == "fosmodel" else f"fosmodel.{layer}").__all__]
+    assert not wrong, f"the diagram shows names the layer does not export: {wrong}"
+
+
+def test_the_guide_s_module_table_lists_every_module_and_no_other():
+    listed = set(re.findall(r"`(fosmodel/[\w/]+\.py)`", GUIDE))
+    cli_row = next(line for line in GUIDE.splitlines() if line.startswith("| `fosmodel/cli/`"))
+    modules = {p.relative_to(ROOT).as_posix() for p in PACKAGE.rglob("*.py")
+               if p.name != "__init__.py" or p.parent == PACKAGE}
+    missing = [m for m in modules if m not in listed
+               and not (m.startswith("fosmodel/cli/") and f"`{Path(m).name}`" in cli_row)]
+    assert not missing, f"DEVELOPERS.md's module table lacks {sorted(missing)}"
+    assert not [m for m in listed if not (ROOT / m).is_file()], "the table lists moved modules"
+
+
+def test_the_readme_s_layer_chain_names_every_layer_in_order():
+    layout = (ROOT / "README.md").read_text(encoding="utf-8").split("## Layout", 1)[1]
+    chain = layout.split("down this line", 1)[1].split("See `DEVELOPERS.md`", 1)[0]
+    floors = [re.findall(r"`([\w./]+)`", re.sub(r"\([^()]*\)", "", floor))
+              for floor in chain.split("->")]
+    assert floors == [["core", "typeset"], ["models"], ["io"], ["noise"], ["filter"],
+                      ["study", "loop"], ["workflows"], ["cli/", "demo.py"]]
