@@ -24,6 +24,7 @@ import pandas as pd
 
 from ..core.exceptions import InputError
 from ..core.parallel import in_workers
+from ..core.validation import check_int, check_positive
 from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_covariance
 from ..filter.statespace import StateSpace
 from ..io.record import Record
@@ -74,6 +75,33 @@ class ImuConfig:
     loop_max_lag: int = 10
     min_tau: float | None = None
     n_jobs: int = 2
+
+    def __post_init__(self) -> None:
+        """Check every option, before any record is read.
+
+        The study's grid, segments and outage metrics as :class:`StudyConfig` checks them
+        (with the sensor and rate of any record); the loop's split and lag, the Allan fits'
+        shortest tau and the number of jobs here.
+
+        Raises
+        ------
+        InputError
+            An option out of range; an integer option given as a float (``3.0``) or a bool.
+        """
+        StudyConfig(rate=1.0, sensor="gyro", units="rad/s", orders=self.orders,
+                    degrees=self.degrees, methods=self.methods, protocols=self.protocols,
+                    train_s=self.train_s, evaluate_s=self.evaluate_s, horizon_s=self.horizon_s,
+                    n_starts=self.n_starts)
+        split = tuple(self.loop_split) if isinstance(self.loop_split, Sequence) else ()
+        if not (len(split) == 2 and all(isinstance(f, (float, int, np.floating, np.integer))
+                                        and not isinstance(f, bool) and 0 < f < 1
+                                        for f in split) and sum(split) < 1):
+            raise InputError("loop_split must be the fractions of the record the loop fits on "
+                             f"and evaluates on, leaving some to predict, got {self.loop_split!r}")
+        check_int(self.loop_max_lag, "loop_max_lag", 1)
+        if self.min_tau is not None:
+            check_positive(self.min_tau, "min_tau")
+        check_int(self.n_jobs, "n_jobs", 1)
 
     def study_config(self, rate: float, axis: Axis) -> StudyConfig:
         """Configure the study of one axis."""
