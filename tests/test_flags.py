@@ -18,10 +18,12 @@ from fosmodel.io import load_record
 
 ROOT = Path(__file__).resolve().parents[1]
 FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
-#: Folders whose messages may name flags: the command line itself, and the residual loop,
-#: whose messages are being reworded on the loop's own branch (its exemption goes when that
-#: branch is merged).
-EXEMPT = ("cli", "loop")
+#: The command line's folder: its messages are the ones that say flags.
+COMMAND_LINE = ("cli",)
+#: Library folders not yet held to the rule, each with the reason; the lead empties this
+#: list once their code has settled and the test passes without them.
+PENDING = {"loop": "the residual loop is being rewritten, its messages with it"}
+EXEMPT = (*COMMAND_LINE, *PENDING)
 
 
 def _messages(path):
