@@ -81,6 +81,8 @@ def test_the_scan_sees_flags_in_f_strings_but_not_in_docstrings(tmp_path):
     ("2 IMU topics, choose one with topic=: /a, /b",
      "2 IMU topics, choose one with --topic: /a, /b"),
     ("leave out temperature_topic=", "leave out --temperature-topic"),
+    ("shorten train_s= and evaluate_s= (the loop's: loop_split=) or horizon_s=, or give",
+     "shorten --split (the loop's: --loop-split) or --horizon, or give"),
 ])
 def test_each_option_the_library_names_becomes_its_flag(library, command_line):
     assert with_flags(library) == command_line

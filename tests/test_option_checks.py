@@ -39,8 +39,8 @@ def test_the_study_s_options_are_checked(options, message):
     ({"n_jobs": 2.0}, "n_jobs must be an integer >= 1, got 2.0"),
     ({"loop_max_lag": 0}, "loop_max_lag must be an integer >= 1, got 0"),
     ({"min_tau": -1.0}, "min_tau must be a finite number > 0, got -1.0"),
-    ({"loop_split": (0.6, 0.5)}, "loop_split must be the fractions"),
-    ({"loop_split": (0.5,)}, "loop_split must be the fractions"),
+    ({"loop_split": (0.6, -0.5)}, "each loop_split fraction must be a finite number > 0"),
+    ({"loop_split": (0.5,)}, "loop_split must be the two fractions"),
     ({"n_starts": 0}, "n_starts must be an integer >= 1, got 0"),
 ])
 def test_the_six_axis_workflow_s_options_are_checked(options, message):

@@ -15,7 +15,6 @@ import traceback
 import warnings
 
 from ..core.exceptions import InputError
-from ..io.sensor_log import TopicError
 from .flags import with_flags
 from .parser import build_parser
 
@@ -45,6 +44,8 @@ def _run(args: argparse.Namespace) -> int:
     try:
         return args.func(args)
     except InputError as exc:
+        from ..io.sensor_log import TopicError  # here: a command's modules, not the parser's
+
         message = with_flags(exc.with_flag() if isinstance(exc, TopicError) else str(exc))
         print(f"fosmodel: error: {' '.join(message.split())}", file=sys.stderr)
         return 2

@@ -16,9 +16,11 @@ import re
 _START = r"(?<![\w.'\"/=-])"
 #: The options the library names, by their keyword; each becomes ``--`` and its name.
 KEYWORDS = ("columns", "rate", "scale", "uniform", "outliers", "gaps", "topic",
-            "temperature_topic")
+            "temperature_topic", "loop_split")
 # Spellings with a value that the flag spells otherwise, tried before the bare keywords.
 _SPELLINGS = (
+    (re.compile(_START + r"train_s= and evaluate_s="), "--split"),
+    (re.compile(_START + r"horizon_s="), "--horizon"),
     (re.compile(_START + r"uniform=True\b"), "--uniform"),
     (re.compile(_START + r"gaps=([\"'])(fill|segments)\1"), r"--\2"),
     (re.compile(_START + r"scale=\{([\"'])(.*?)\1: (.*?)\}"), r"--scale \2=\3"),

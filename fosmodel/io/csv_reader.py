@@ -16,15 +16,17 @@ import re
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-import pandas as pd
 
 from ..core.exceptions import InputError, error_line
 from .compression import OPENERS, capped_source
 from .timebase import RATE_RANGE, RATE_TOLERANCE
 from .values import number_or_ratio
+
+if TYPE_CHECKING:  # pandas is imported where a record is read: not by the CLI's help
+    import pandas as pd  # here: loaded by the first record read, not by the parser
 
 _PREAMBLE_MAX_LINES = 50
 _RATE_KEYS = frozenset({"fs", "rate", "samplerate", "samplingrate", "samplefrequency",
@@ -131,6 +133,8 @@ _CSV_OPTIONS = {"sep": ",", "skipinitialspace": True}
 
 def _csv_names(path: Path, skip: int) -> list[str]:
     """Return the header on line ``skip + 1``, as written (pandas would rename a repeated name)."""
+    import pandas as pd  # here: loaded by the first record read, not by the parser
+
     try:
         names = pd.read_csv(path, header=None, nrows=1, dtype=str, keep_default_na=False,
                             skiprows=skip, **_CSV_OPTIONS).iloc[0].tolist()
@@ -154,6 +158,8 @@ def _csv_blocks(path: Path, skip: int, keep: list[str] | None,
     (its last field missing) is refused even when that column is not kept,
     since the missing field may be any of them.
     """
+    import pandas as pd  # here: loaded by the first record read, not by the parser
+
     try:
         with warnings.catch_warnings(), capped_source(path) as source:
             warnings.simplefilter("error", pd.errors.ParserWarning)
@@ -182,6 +188,8 @@ def _check_last_field(block: pd.DataFrame, keep: list[str], path: Path, first_li
 
 def _csv_error(path: Path, skip: int, exc: Exception) -> Exception:
     """Return the InputError for a failed CSV read (other exceptions pass through)."""
+    import pandas as pd  # here: loaded by the first record read, not by the parser
+
     if isinstance(exc, InputError):
         return exc
     if isinstance(exc, pd.errors.EmptyDataError):

@@ -18,19 +18,19 @@ if TYPE_CHECKING:
     from .latex import (
         latex_escape,
         latex_number,
-        latex_table,
         latex_text,
         mathtext_units,
         table_label,
     )
     from .markdown import markdown_table
     from .summary import Summary
+    from .tables import latex_table
 else:
     __getattr__, __dir__ = attach(__name__, {
-        "latex": ("latex_escape", "latex_number", "latex_table", "latex_text", "mathtext_units",
-                  "table_label"),
+        "latex": ("latex_escape", "latex_number", "latex_text", "mathtext_units", "table_label"),
         "markdown": ("markdown_table",),
         "summary": ("Summary",),
+        "tables": ("latex_table",),
     })
 
 __all__ = ["Summary", "latex_escape", "latex_number", "latex_table", "latex_text",

@@ -92,6 +92,7 @@ def run_fleet(
     names = _names(files)
     _check_steps(config.steps)
     store = Path(store)
+    created = not store.exists()
     store.mkdir(parents=True, exist_ok=True)
     prints = {name: fingerprint(path, config) for name, path in names.items()}
     todo = [n for n in names if not _finished(store / n, prints[n])]
@@ -104,6 +105,8 @@ def run_fleet(
                 failures[name] = error
             bar.update()
     if failures:
+        if created and not any(store.iterdir()):  # a refused fleet leaves nothing behind
+            store.rmdir()
         _raise(failures, len(names), store)
     markers = {n: json.loads((store / n / MARKER).read_text()) for n in names}
     table = pd.concat([pd.read_csv(store / n / "rows.csv") for n in names], ignore_index=True)
