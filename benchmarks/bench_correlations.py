@@ -33,8 +33,7 @@ from _common import interleaved_best, limit_blas, machine_line
 from bench_scaling import make_signals
 
 from fosmodel import FOSModel, fos
-from fosmodel.core.candidates import CandidateSpec, evaluate_terms, generate_terms
-from fosmodel.core.fos import center
+from fosmodel.core import CandidateSpec, center, evaluate_terms, generate_terms
 
 TOL = 1e-8
 FULL = [  # (N, L, CP, exogenous lags, k)

@@ -27,8 +27,8 @@ reuses them on the next run).  On its ``gx_dps`` axis:
 * the model-order study of the whole day (``run_study``: orders 1-10, CP 1-2,
   every method, both protocols, the CLI's default 180 s + 180 s split).
 
-Targets (issue 20): fit < 30 s and < 2 GB peak; Allan < 15 s; study and loop
-< 2 min each.  Writes a text table and a log-log figure.
+Targets, so that a day's recording is practical on a laptop: fit < 30 s and < 2 GB
+peak; Allan < 15 s; study and loop < 2 min each.  Writes a text table and a log-log figure.
 
 Run: ``python benchmarks/bench_day.py [--quick] [--data DIR] [--out PATH]``
 """
@@ -100,7 +100,7 @@ def _reset_peak() -> None:
 
 
 def _fos(y: np.ndarray) -> object:
-    from fosmodel.models.model import FOSModel
+    from fosmodel.models import FOSModel
 
     return FOSModel(max_lag=50, degree=2, max_terms=30, stop="max_terms").fit(y)
 
@@ -112,21 +112,19 @@ def _burg(y: np.ndarray) -> object:
 
 
 def _loop(y: np.ndarray) -> object:
-    from fosmodel.loop.closeloop import LoopConfig, close_loop
+    from fosmodel.loop import LoopConfig, close_loop
 
     return close_loop(y, {}, LoopConfig(rate=RATE, sensor="gyro", units="deg/s"))
 
 
 def _study(y: np.ndarray) -> object:
-    from fosmodel.study.harness import StudyConfig
-    from fosmodel.study.runner import run_study
+    from fosmodel.study import StudyConfig, run_study
 
     return run_study(y, StudyConfig(rate=RATE, sensor="gyro", units="deg/s"))
 
 
 def _allan(y: np.ndarray) -> object:
-    from fosmodel.noise.allan import allan_deviation
-    from fosmodel.noise.allan_fit import fit_noise
+    from fosmodel.noise import allan_deviation, fit_noise
 
     return fit_noise(allan_deviation(y, RATE, units="deg/s", sensor="gyro"))
 
@@ -134,9 +132,9 @@ def _allan(y: np.ndarray) -> object:
 def _oadev(y: np.ndarray) -> object:
     import allantools
 
-    from fosmodel.noise.allan import _averaging_factors
+    from fosmodel.noise import averaging_factors
 
-    ms = _averaging_factors(len(y), RATE, None, 10)  # allan_deviation's default taus
+    ms = averaging_factors(len(y), RATE, None, 10)  # allan_deviation's default taus
     return allantools.oadev(y, rate=RATE, data_type="freq", taus=ms / RATE)
 
 
@@ -146,7 +144,7 @@ STEPS = {"fit": _fos, "burg": _burg, "loop": _loop, "study": _study, "allan": _a
 
 def child(step: str, axis: str, n: int) -> None:
     """Run one step on the first ``n`` samples in this fresh process; print one JSON line."""
-    import fosmodel.models.model  # noqa: F401  (imports before the RSS reading)
+    from fosmodel.models import FOSModel  # noqa: F401  (imports before the RSS reading)
 
     y = np.array(np.load(axis, mmap_mode="r")[:n])
     before = _status_mb("VmRSS")
@@ -179,7 +177,7 @@ def time_reading(paths: dict[str, Path]) -> list[tuple[str, float, str, float]]:
     import pandas as pd
     import pyarrow.parquet as pq
 
-    from fosmodel.io.loader import load_record
+    from fosmodel.io import load_record
 
     def npy_columns() -> list[np.ndarray]:
         table = np.load(paths["npy"], mmap_mode="r")

@@ -31,9 +31,7 @@ import dask
 import numpy as np
 
 from data_synth import make_scenario
-from fosmodel.study.distributed import local_client
-from fosmodel.study.harness import StudyConfig, StudyPlan, plan_study
-from fosmodel.study.runner import run_studies
+from fosmodel.study import StudyConfig, StudyPlan, local_client, plan_study, run_studies
 
 
 def make_plan(duration: float) -> StudyPlan:

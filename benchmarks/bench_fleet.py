@@ -37,13 +37,12 @@ from _common import machine_line
 from bench_distributed import cores_available, cpu_seconds
 
 from data_synth import make_scenario, write_record
-from fosmodel.io.split import SplitSpec
-from fosmodel.study.distributed import local_client
-from fosmodel.workflows.fleet import MARKER, FleetConfig, record_name, run_fleet
-from fosmodel.workflows.imu import ImuConfig
+from fosmodel.io import SplitSpec
+from fosmodel.study import local_client
+from fosmodel.workflows import MARKER, FleetConfig, ImuConfig, record_name, run_fleet
 
 HERE = Path(__file__).resolve().parent
-FLEET = 100  # the fleet of issue 20: 100 sessions of a few minutes
+FLEET = 100  # a lab's fleet: 100 sessions of a few minutes
 ADIS = HERE.parent.parent / "shared" / "data" / "adis16405"
 
 
@@ -100,7 +99,7 @@ def figure(tasks: list[float], measured: dict[int, float], here: float, out: Pat
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
 
-    from fosmodel.io.figures import tidy
+    from fosmodel.io import tidy
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(9.5, 3.8), layout="constrained")
     left.hist(tasks, bins=min(20, len(tasks)), color="C0")

@@ -27,10 +27,9 @@ import pandas as pd
 from _common import machine_line
 
 from data_synth import make_scenario
-from fosmodel.loop.closeloop import LoopConfig, close_loop
-from fosmodel.models.baselines import ARModel
-from fosmodel.models.model import FOSModel
-from fosmodel.noise.metrics import outage_metrics
+from fosmodel.loop import LoopConfig, close_loop
+from fosmodel.models import ARModel, FOSModel
+from fosmodel.noise import outage_metrics
 
 HERE = Path(__file__).resolve().parent
 ADIS = HERE.parent.parent / "shared" / "data" / "adis16405" / "imu1.csv.gz"

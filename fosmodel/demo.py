@@ -29,6 +29,8 @@ from .study.harness import StudyConfig, StudyResult
 from .study.report import paper_table, table_orders, write_study
 from .study.runner import run_study
 
+__all__ = ["run_demo"]
+
 SEED = 2013
 RECORDS: dict[str, tuple[int, str, dict[str, Any], str, str]] = {
     # table number, scenario, its overrides (make_scenario's keywords), sensor, units

@@ -1,4 +1,4 @@
-"""Allan variance noise fit on a gyro with known ARW and RRW (issue 9, part 3; seed 004).
+"""Allan variance noise fit on a gyro with known ARW and RRW (seed 004).
 
 Twelve hours of gyro 1 of the ``gyro_array_8`` scenario at 102.4 Hz with seed 004's typical
 values (eq. 5.4: ARW 0.068 deg/sqrt(s), RRW 0.00029 deg/sqrt(s^3)); the overlapping Allan
@@ -18,10 +18,8 @@ import pandas as pd
 from doc_pages import replace_section, show_figure
 
 from data_synth import make_scenario
-from fosmodel.noise.allan import allan_deviation
-from fosmodel.noise.allan_fit import TERMS, fit_noise
-from fosmodel.noise.allan_report import write_allan
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel.noise import TERMS, allan_deviation, fit_noise, write_allan
+from fosmodel.typeset import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "allan_seed004"
 HOURS = 12.0

@@ -30,10 +30,15 @@ from doc_pages import README, replace_section, show_figure
 
 from data_synth import make_scenario
 from data_synth.true_effects import true_effects
-from fosmodel.loop.closeloop import LoopConfig, close_loop, score_family
-from fosmodel.loop.effects import CandidateFamily, Effect
-from fosmodel.loop.loop_report import write_loop_report
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel.loop import (
+    CandidateFamily,
+    Effect,
+    LoopConfig,
+    close_loop,
+    score_family,
+    write_loop_report,
+)
+from fosmodel.typeset import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "close_loop"
 # (record name, scenario, overrides)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from fosmodel.io.output import atomic_write, write_text
+from fosmodel.io import atomic_write, write_text
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 PAGES = README.parent / "docs" / "pages"

@@ -1,4 +1,4 @@
-"""Arrays of gyros measuring one rate (issue 9, part 5; seed 004 chapters 6-10).
+"""Arrays of gyros measuring one rate (seed 004 chapters 6-10).
 
 1. Seed 004's closed-form averaging drift (Tables 10.1-10.2, eqs. 7.13-7.16).
 2. The steady-state Kalman gain of the virtual-gyro filter: the three-gyro example of eq. 8.8
@@ -25,7 +25,7 @@ from matplotlib.figure import Figure
 
 from data_synth import CorrelatedRandomWalk, CorrelatedWhiteNoise, compose, make_scenario
 from data_synth.scenarios import ARRAY_ARW, ARRAY_RRW
-from fosmodel.filter.arrays import (
+from fosmodel.filter import (
     CORR_EQ_8_8,
     CORR_Q3,
     CORR_Q5,
@@ -41,9 +41,8 @@ from fosmodel.filter.arrays import (
     recursive_gain,
     steady_state_gain,
 )
-from fosmodel.io.output import write_text
-from fosmodel.study.report import save_figure, write_tables
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel.io import save_figure, write_tables, write_text
+from fosmodel.typeset import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "gyro_array"
 NAMES = tuple(f"gyro_{i}" for i in range(1, 9))

@@ -1,6 +1,7 @@
 """From Allan to a filter: the Allan-derived error model beside GM, AR and FOS on real records.
 
-Issue 17 part 5.  The accelerometers x, y and z of the six static ADIS16405 sessions (18
+Whether the error model read off an Allan fit serves a filter as well as the fitted ones do.
+The accelerometers x, y and z of the six static ADIS16405 sessions (18
 axes, ``../shared/data/adis16405``) are converted from g to m/s^2 (9.80665) and block-averaged
 from 100 Hz to 20 Hz (means of 5 samples: the rate of ``kalman_static.py``, whose fits and
 filter this study imports).  Each axis is split in halves of 100,000 samples (1.39 h).
@@ -52,19 +53,17 @@ from kalman_static import (
 )
 from matplotlib.figure import Figure
 
-from fosmodel.filter.allan_statespace import (
+from fosmodel.filter import (
+    StateSpace,
     allan_state_space,
     initial_covariance,
     model_adev,
     model_terms,
+    to_state_space,
 )
-from fosmodel.filter.statespace import StateSpace, to_state_space
-from fosmodel.io.loader import load_record
-from fosmodel.io.output import save_figure, write_tables
-from fosmodel.noise.allan import allan_deviation
-from fosmodel.noise.allan_fit import NoiseFit, fit_noise
-from fosmodel.noise.metrics import STANDARD_GRAVITY
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel.io import load_record, save_figure, write_tables
+from fosmodel.noise import STANDARD_GRAVITY, NoiseFit, allan_deviation, fit_noise
+from fosmodel.typeset import markdown_table
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

@@ -36,11 +36,16 @@ from scipy.linalg import block_diag
 
 from data_synth import make_scenario
 from fosmodel import FOSModel
-from fosmodel.filter.kalman import KalmanFilter, run_filter
-from fosmodel.filter.statespace import StateSpace, position_velocity_error_model, to_state_space
-from fosmodel.models.baselines import ARModel, GaussMarkovModel
-from fosmodel.study.report import save_figure, write_tables
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel.filter import (
+    KalmanFilter,
+    StateSpace,
+    position_velocity_error_model,
+    run_filter,
+    to_state_space,
+)
+from fosmodel.io import save_figure, write_tables
+from fosmodel.models import ARModel, GaussMarkovModel
+from fosmodel.typeset import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "kalman_static"
 RATE = 20.0

@@ -33,18 +33,23 @@ import numpy as np
 import pandas as pd
 from doc_pages import README, replace_section, show_figure
 
-from fosmodel.core.parallel import in_workers
-from fosmodel.io.loader import Record, load_record
-from fosmodel.io.samples import load_mpu6050_static
-from fosmodel.loop.closeloop import LoopConfig, LoopResult, close_loop, score_family
-from fosmodel.loop.diagnose import least_squares_spectrum
-from fosmodel.loop.effects import CandidateFamily, Effect
-from fosmodel.loop.loop_report import evaluation_text, write_loop_report
-from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
-from fosmodel.study.harness import StudyConfig, StudyResult
-from fosmodel.study.report import paper_table, write_study
-from fosmodel.study.runner import run_study
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel import imu_noise
+from fosmodel.core import in_workers
+from fosmodel.io import Record, load_mpu6050_static, load_record
+from fosmodel.loop import (
+    CandidateFamily,
+    Effect,
+    LoopConfig,
+    LoopResult,
+    close_loop,
+    evaluation_text,
+    least_squares_spectrum,
+    score_family,
+    write_loop_report,
+)
+from fosmodel.noise import Axis, write_imu_noise
+from fosmodel.study import StudyConfig, StudyResult, paper_table, run_study, write_study
+from fosmodel.typeset import markdown_table
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

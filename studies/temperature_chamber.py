@@ -1,4 +1,4 @@
-"""Temperature-dependent error models of the chamber records (issue 9, part 4; seed 001).
+"""Temperature-dependent error models of the chamber records (seed 001).
 
 For ``temp_chamber_gyro`` (seed 0) and ``temp_chamber_accel`` (seed 1): the plateaus of the
 temperature column, the error model per plateau (bias, Allan white-noise coefficient, AR(1)
@@ -23,9 +23,8 @@ from numpy.polynomial import Polynomial
 
 from data_synth import make_scenario
 from data_synth.scenarios import CC300_ACCEL_VRW, CC300_GYRO_ARW, CC300_TEMPS_C
-from fosmodel.io.output import write_text
-from fosmodel.study.report import save_figure, write_tables
-from fosmodel.study.temperature import (
+from fosmodel.io import save_figure, write_tables, write_text
+from fosmodel.study import (
     concatenate_plateaus,
     global_models,
     held_out_comparison,
@@ -35,7 +34,7 @@ from fosmodel.study.temperature import (
     temperature_segments,
     term_standard_errors,
 )
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel.typeset import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "temperature_chamber"
 #: sensor: scenario, units, seed 001 Table 1 noise, seed.  The two scenarios draw their white

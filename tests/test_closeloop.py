@@ -1,4 +1,4 @@
-"""The residual loop on data_synth records whose effect nobody declared (issues 5 and 15)."""
+"""The residual loop on data_synth records whose effect nobody declared: it must find it."""
 
 import numpy as np
 import pytest

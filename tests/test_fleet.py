@@ -170,8 +170,8 @@ def test_a_split_too_long_for_a_record_is_refused_by_name(files, tmp_path):
         "settings, which need at least 270 s: the study needs 270 s (the split 150 s / 60 s "
         "leaves 3000 samples to predict, 6000 are needed (a 30 s outage horizon and two 30 s "
         "bias windows)); the loop needs 270 s (")
-    assert message.endswith("shorten --split (the loop's: --loop-split) or --horizon, or give "
-                            "a longer record (1 of 1 records failed)")
+    assert message.endswith("shorten train_s= and evaluate_s= (the loop's: loop_split=) or "
+                            "horizon_s=, or give a longer record (1 of 1 records failed)")
     assert list(tmp_path.iterdir()) == []
 
 

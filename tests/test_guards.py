@@ -1,5 +1,5 @@
-"""Nothing lost, nothing silently wrong (issue 16): outputs never over inputs, bounded reads,
-and refusals where a result would mean nothing."""
+"""Nothing lost, nothing silently wrong: outputs never over inputs, bounded reads, and
+refusals where a result would mean nothing."""
 
 import gzip
 import json

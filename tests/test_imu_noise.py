@@ -74,7 +74,7 @@ def test_axes_given_inferred_and_refused():
                    "as temp=UNITS (e.g. temp=deg/s for a gyro, temp=m/s^2 for an accelerometer)",
         ("ax:accel",): "expected COLUMN or COLUMN:SENSOR:UNITS (e.g. gx:gyro:deg/s), got "
                        "'ax:accel'",
-        ("gx_dps", "gx_dps"): "column 'gx_dps' is named twice in --columns",
+        ("gx_dps", "gx_dps"): "column 'gx_dps' is named twice in columns=",
     }
     for columns, message in cases.items():
         with pytest.raises(InputError) as err:

@@ -7,7 +7,8 @@ A module may import its own folder and the folders below it (``core`` and
 ``study`` and ``loop`` are side by side and never import each other;
 ``workflows`` puts them together over a whole record); ``data_synth`` is a
 client of the layers up to ``filter`` that only the application (``cli``,
-``demo``) uses.  Every import counts, also one inside a function.
+``demo``) uses.  Every import counts, also one inside a function.  ``_version`` and
+``_lazy`` (how a package's public names are imported on first use) sit under every layer.
 """
 
 from __future__ import annotations
@@ -18,9 +19,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-RANK = {"_version": 0, "core": 0, "typeset": 0, "models": 1, "io": 2, "noise": 3, "filter": 4,
-        "study": 5, "loop": 5, "data_synth": 5.5, "workflows": 5.7, "cli": 6, "demo": 6,
-        "__init__": 6}
+RANK = {"_version": 0, "_lazy": 0, "core": 0, "typeset": 0, "models": 1, "io": 2, "noise": 3,
+        "filter": 4, "study": 5, "loop": 5, "data_synth": 5.5, "workflows": 5.7, "cli": 6,
+        "demo": 6, "__init__": 6}
 #: Layers on one floor that never import each other.
 SIDE_BY_SIDE = ({"core", "typeset"}, {"study", "loop"})
 

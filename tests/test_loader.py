@@ -30,7 +30,7 @@ def test_csv_without_time_needs_rate(tmp_path):
     p = _csv(tmp_path, "a,b\n1,2\n3,4\n")
     rec = load_record(p)
     assert rec.rate is None
-    with pytest.raises(InputError, match="no time column; give the sample rate with --rate"):
+    with pytest.raises(InputError, match="no time column; give the sample rate with rate=HZ"):
         rec.require_rate()
     assert load_record(p, rate=100).rate == 100.0
 
@@ -86,7 +86,7 @@ def test_bad_csv_is_named_precisely(tmp_path, text, message):
 
 def test_rate_disagreeing_with_time(tmp_path):
     p = _csv(tmp_path, "time,a\n0,1\n0.01,2\n0.02,3\n")
-    message = r"--rate 200 Hz disagrees with the time column \(100 Hz\)"
+    message = r"rate=200 Hz disagrees with the time column \(100 Hz\)"
     with pytest.raises(InputError, match=message):
         load_record(p, rate=200)
 
@@ -143,7 +143,7 @@ def test_preamble_rate_keys(tmp_path, key):
 @pytest.mark.parametrize(
     "text, rate, message",
     [
-        ("Fs,100\na\n1\n", 200, r"--rate 200 Hz disagrees with the preamble's Fs,100 \(line 1\)"),
+        ("Fs,100\na\n1\n", 200, r"rate=200 Hz disagrees with the preamble's Fs,100 \(line 1\)"),
         ("Fs,abc\na\n1\n", None, "line 1: the preamble sample rate Fs,abc is not a positive"),
         ("Fs,-5\na\n1\n", None, "line 1: the preamble sample rate Fs,-5 is not a positive"),
         ("Fs,50\ntime,a\n0,1\n0.01,2\n0.02,3\n", None,
@@ -194,7 +194,7 @@ def test_scale_turns_counts_into_units(tmp_path):
 
 def test_scale_of_an_unknown_column(tmp_path):
     p = _csv(tmp_path, "gx,gy\n1,2\n")
-    with pytest.raises(InputError, match=r"--scale names no column 'g_x' \(did you mean 'gx'\?\); "
+    with pytest.raises(InputError, match=r"scale= names no column 'g_x' \(did you mean 'gx'\?\); "
                                          "columns: gx, gy"):
         load_record(p, scale={"g_x": 0.5})
 
@@ -213,7 +213,7 @@ def test_bursty_time_is_refused_without_uniform(bursty_csv):
                rf"\(median interval 0.001 s, mean 0.00991 s\); effective rate {effective:.6g} Hz")
     with pytest.raises(InputError, match=message) as err:
         load_record(p)
-    assert "pass --uniform" in str(err.value) and "or --rate HZ" in str(err.value)
+    assert "pass uniform=True" in str(err.value) and "or rate=HZ" in str(err.value)
 
 
 def test_bursty_time_with_uniform_or_rate(bursty_csv):
@@ -224,7 +224,7 @@ def test_bursty_time_with_uniform_or_rate(bursty_csv):
     assert any("bursty receive time" in n and f"uniformly spaced at {effective:.6g} Hz" in n
                for n in rec.notes)
     assert load_record(p, rate=100).rate == 100.0
-    with pytest.raises(InputError, match="--rate 200 Hz disagrees with the effective rate of the "
+    with pytest.raises(InputError, match="rate=200 Hz disagrees with the effective rate of the "
                                          "bursty time column"):
         load_record(p, rate=200)
 
@@ -247,7 +247,7 @@ def test_regular_time_checks_still_hold(tmp_path):
 
 def test_uniform_without_time_is_noted(tmp_path):
     rec = load_record(_csv(tmp_path, "a\n0.5\n1.5\n"), rate=10, uniform=True)
-    assert rec.notes == ["--uniform has no effect: the record has no time column"]
+    assert rec.notes == ["uniform=True has no effect: the record has no time column"]
 
 
 # --- outliers --------------------------------------------------------------------------------
@@ -296,12 +296,13 @@ def test_outliers_dropped_keep_the_time_gap(spiky_csv):
 
 def test_dropping_without_time_is_refused(tmp_path, spiky_csv):
     p, _, _ = spiky_csv(with_time=False)
-    with pytest.raises(InputError, match=f"{p}: --outliers drop would remove 2 sample"
+    with pytest.raises(InputError, match=f"{p}: outliers='drop' would remove 2 sample"
                                          r"\(s\) from a record without a time column, which "
-                                         "breaks the uniform sample spacing.*use --outliers clip"):
+                                         "breaks the uniform sample spacing.*"
+                                         r"use outliers='clip' \(or 'keep'\)$"):
         load_record(p, outliers="drop")
     clean = load_record(_csv(tmp_path, "a\n0.5\n1.5\n0.7\n"), outliers="drop")
-    assert clean.notes == ["--outliers drop: no outliers found (|x - median| > 10 x 1.4826 MAD)"]
+    assert clean.notes == ["outliers='drop': no outliers found (|x - median| > 10 x 1.4826 MAD)"]
     with pytest.raises(InputError, match="outliers must be one of keep, clip, drop"):
         load_record(p, outliers="remove")
 
@@ -341,8 +342,9 @@ def _gappy(tmp_path):
 
 def test_gaps_are_refused_with_both_ways_out(tmp_path):
     p, _, _ = _gappy(tmp_path)
-    with pytest.raises(InputError, match="line 102: a gap of 0.51 s.*pass --fill to interpolate "
-                                         "across them or --segments to fit on the pieces"):
+    with pytest.raises(InputError, match="line 102: a gap of 0.51 s.*pass gaps='fill' to "
+                                         "interpolate across them or gaps='segments' to fit on "
+                                         "the pieces"):
         load_record(p)
 
 
@@ -453,7 +455,7 @@ def test_a_record_over_the_memory_budget_is_refused_at_its_first_block(tmp_path,
     width = 6 if name == "w.npy" else 7
     with pytest.raises(InputError, match=rf"^{tmp_path / name}: too large to read: 1,000 rows of "
                        rf"{width} column\(s\) take 0.0 GiB as float64, more than the 0.0 GiB "
-                       r"this machine has free; read fewer columns \(--column\) or a shorter "
+                       r"this machine has free; read fewer columns \(columns=\) or a shorter "
                        r"stretch$"):
         load_record(tmp_path / name, rate=100.0 if name == "w.npy" else None)
     assert len(converted) == width  # the first block's columns, no more
@@ -509,13 +511,13 @@ def test_tenths_equal_numpy_histogram(seed):
     np.testing.assert_array_equal(timebase._tenths(time), np.histogram(time, bins=10)[0])
 
 
-@pytest.mark.parametrize("gaps, offered", [("refuse", " or --segments to fit on the pieces"),
+@pytest.mark.parametrize("gaps, offered", [("refuse", " or gaps='segments' to fit on the pieces"),
                                            ("contiguous", "")])
 def test_a_gap_is_refused_offering_what_the_caller_can_take(tmp_path, gaps, offered):
     path = tmp_path / "gap.csv"
     path.write_text("time,gx\n0,1\n0.01,2\n0.02,3\n0.5,4\n0.51,5\n")
     message = (f"{path}: column 'time', line 5: a gap of 0.48 s where the sample interval is "
-               "0.01 s (1 gap(s) in the record); pass --fill to interpolate across them"
+               "0.01 s (1 gap(s) in the record); pass gaps='fill' to interpolate across them"
                f"{offered}")
     with pytest.raises(InputError) as err:
         load_record(path, gaps=gaps)

@@ -126,8 +126,9 @@ def test_the_loaders_checks_apply_to_a_bag(imu_bag):
     with pytest.raises(InputError) as err:
         load_record(path)
     assert str(err.value) == (f"{path}: column 'time', row 100: a gap of 0.025 s where the sample "
-                              "interval is 0.005 s (1 gap(s) in the record); pass --fill to "
-                              "interpolate across them or --segments to fit on the pieces")
+                              "interval is 0.005 s (1 gap(s) in the record); pass gaps='fill' "
+                              "to interpolate across them or gaps='segments' to fit on the "
+                              "pieces")
     filled = load_record(path, gaps="fill", columns=["gx"])
     assert filled.names == ["gx"] and filled.n_samples == 404
     np.testing.assert_allclose(filled.column("gx")[:100], arrays["/imu0"]["gx"][:100], rtol=1e-9)
@@ -135,7 +136,7 @@ def test_the_loaders_checks_apply_to_a_bag(imu_bag):
     assert pieces.segments == [slice(0, 100), slice(100, 400)]
     scaled = load_record(path, gaps="fill", scale={"gx": 180 / np.pi})
     assert "gx" not in scaled.units and scaled.units["gy"] == "rad/s"  # its units changed
-    with pytest.raises(InputError, match=r"--rate 100 Hz disagrees with the time column "
+    with pytest.raises(InputError, match=r"rate=100 Hz disagrees with the time column "
                                          r"\(200 Hz\)$"):
         load_record(path, gaps="fill", rate=100.0)
     with pytest.raises(InputError, match=r": no column 'gq'; columns: gx, gy, gz, ax, ay, az$"):

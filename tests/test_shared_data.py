@@ -74,7 +74,7 @@ def _check_imu4_disturbances(rec):
 @pytest.mark.parametrize("stem", SUNSIDED)
 def test_mpu6050_sunsided_sessions(stem):
     path = DATA / "mpu6050_sunsided" / f"{stem}.csv.gz"
-    with pytest.raises(InputError, match="bursty receive time.*pass --uniform"):
+    with pytest.raises(InputError, match="bursty receive time.*pass uniform=True"):
         load_record(path)
     rec = load_record(path, uniform=True)
     assert rec.n_samples == SUNSIDED[stem]

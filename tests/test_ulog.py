@@ -66,8 +66,8 @@ def test_sensor_combined_sample_for_sample():
 def test_the_logs_gaps_are_refused_as_in_any_record():
     assert _message(lambda: load_record(SAMPLE)) == (
         f"{SAMPLE}: column 'time', row 1: a gap of 0.036 s where the sample interval is 0.004 s "
-        "(8 gap(s) in the record); pass --fill to interpolate across them or --segments to fit "
-        "on the pieces")
+        "(8 gap(s) in the record); pass gaps='fill' to interpolate across them or "
+        "gaps='segments' to fit on the pieces")
     filled = load_record(SAMPLE, gaps="fill", columns=["gz"])
     assert filled.names == ["gz"] and filled.n_samples == 17221  # 151 samples filled in
 

@@ -15,6 +15,7 @@ import traceback
 import warnings
 
 from ..core.exceptions import InputError
+from .flags import with_flags
 from .parser import build_parser
 
 __all__ = ["build_parser", "main"]
@@ -23,7 +24,7 @@ __all__ = ["build_parser", "main"]
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
                       lineno: int, line: str | None = None) -> str:
     """Format a warning as the command line shows it: one line, like its notes and errors."""
-    return f"fosmodel: warning: {' '.join(str(message).split())}\n"
+    return f"fosmodel: warning: {' '.join(with_flags(str(message)).split())}\n"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -45,7 +46,7 @@ def _run(args: argparse.Namespace) -> int:
     except InputError as exc:
         from ..io.sensor_log import TopicError  # here: a command's modules, not the parser's
 
-        message = exc.with_flag() if isinstance(exc, TopicError) else str(exc)
+        message = with_flags(exc.with_flag() if isinstance(exc, TopicError) else str(exc))
         print(f"fosmodel: error: {' '.join(message.split())}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -28,6 +28,7 @@ from ..io.output import (
     write_text,
 )
 from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
+from .flags import with_flags
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
@@ -44,7 +45,8 @@ def _load(args: argparse.Namespace, path: str | None = None,
                       temperature_topic=args.temperature_topic)
     if notes:
         for note in rec.notes:
-            print(f"fosmodel: note: {path + ': ' if path else ''}{note}", file=sys.stderr)
+            print(f"fosmodel: note: {path + ': ' if path else ''}{with_flags(note)}",
+                  file=sys.stderr)
     return rec
 
 

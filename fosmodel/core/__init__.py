@@ -5,5 +5,53 @@ providers (point by point, and Korenberg's fast path with its data-free plans), 
 and derived columns, input checks and the package's errors, and how the work uses the
 machine (one BLAS thread, independent calls in worker processes).
 
-The lowest layer: it imports nothing else of fosmodel.
+The lowest layer: it imports nothing else of fosmodel.  Its public names are imported on
+first use (:mod:`fosmodel._lazy`); ``fos()`` itself is :func:`fosmodel.fos` (here
+``fosmodel.core.fos`` is its module).
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+if TYPE_CHECKING:
+    from .candidates import (
+        CandidateSpec,
+        Term,
+        count_candidates,
+        evaluate_terms,
+        generate_terms,
+    )
+    from .correlations import LagCorrelations
+    from .exceptions import (
+        FitWarning,
+        FOSModelError,
+        InputError,
+        NotFittedError,
+        UnstableModelWarning,
+    )
+    from .fos import DataCorrelations, FOSResult, StopRule, center
+    from .levels import levels_for
+    from .parallel import in_workers
+    from .shapes import clear_plans, layout
+else:
+    __getattr__, __dir__ = attach(__name__, {
+        "candidates": ("CandidateSpec", "Term", "count_candidates", "evaluate_terms",
+                       "generate_terms"),
+        "correlations": ("LagCorrelations",),
+        "exceptions": ("FOSModelError", "FitWarning", "InputError", "NotFittedError",
+                       "UnstableModelWarning"),
+        "fos": ("DataCorrelations", "FOSResult", "StopRule", "center"),
+        "levels": ("levels_for",),
+        "parallel": ("in_workers",),
+        "shapes": ("clear_plans", "layout"),
+    })
+
+__all__ = [
+    "CandidateSpec", "DataCorrelations", "FOSModelError", "FOSResult", "FitWarning",
+    "InputError", "LagCorrelations", "NotFittedError", "StopRule", "Term",
+    "UnstableModelWarning", "center", "clear_plans", "count_candidates", "evaluate_terms",
+    "generate_terms", "in_workers", "layout", "levels_for",
+]

@@ -172,7 +172,8 @@ class CandidateSpec:
         Raises
         ------
         InputError
-            A lag, degree, product lag or level time constant out of range.
+            A lag, degree, product lag or level time constant out of range, a channel or
+            column name that cannot be one, or ``constant`` not True or False.
         """
         object.__setattr__(self, "exog_lags", dict(self.exog_lags or {}))
         object.__setattr__(self, "columns", tuple(self.columns or ()))
@@ -197,6 +198,8 @@ class CandidateSpec:
                 raise InputError(f"candidate column name {name!r} clashes with a channel")
         if len(set(self.columns)) != len(self.columns):
             raise InputError("candidate column names must be unique")
+        if not isinstance(self.constant, (bool, np.bool_)):
+            raise InputError(f"constant must be True or False, got {self.constant!r}")
 
     @property
     def lag_window(self) -> int:

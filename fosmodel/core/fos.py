@@ -94,7 +94,8 @@ class StopRule:
             raise InputError(
                 f"unknown stop rule {self.kind!r}; choose from {', '.join(STOP_RULES)}")
         if self.kind in ("variance", "mean_square"):
-            if self.tol is None or not 0 < self.tol < 1:
+            if (isinstance(self.tol, bool) or not isinstance(self.tol, (float, int, np.floating))
+                    or not 0 < self.tol < 1):
                 raise InputError(f"stop rule {self.kind!r} needs a tolerance 0 < tol < 1")
         if self.max_terms is not None and (
             isinstance(self.max_terms, bool) or not isinstance(self.max_terms, (int, np.integer))

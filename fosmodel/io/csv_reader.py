@@ -56,7 +56,7 @@ def preamble_rate(
     preamble: Preamble, rate: float | None, src: str, notes: list[str]
 ) -> tuple[float | None, str, dict[str, str]]:
     """Return the rate (given, else from the preamble), what gave it, and the other entries."""
-    given_by = f"--rate {rate:g} Hz" if rate is not None else ""
+    given_by = f"rate={rate:g} Hz" if rate is not None else ""
     keys = [re.sub(r"[^a-z]", "", key.lower()).removesuffix("hz") for _, key, _ in
             preamble.entries]
     at = next((i for i, key in enumerate(keys) if key in _RATE_KEYS), None)

@@ -79,6 +79,7 @@ LOGS = (
     LogFormat("PX4 ULog", "a PX4 ULog file (.ulg)", (ULOG_SUFFIX,), "px4", is_ulog, read_ulog,
               ulog_imu_topics),
 )
+#: Every format a record is read from: the tables, then the logs.
 FORMATS = (*TABLES, *LOGS)
 #: Suffixes of a compressed CSV: ``.gz``, ``.bz2`` and ``.xz`` are read through the capped
 #: stream of :mod:`fosmodel.io.compression`, ``.zip`` and ``.zst`` by pandas.

@@ -182,7 +182,7 @@ def load_record(
         if gaps not in REFUSING and not uniform:
             time, segments = handle_gaps(data, time, gaps, src, time_name, first_line, notes)
     elif uniform:
-        notes.append("--uniform has no effect: the record has no time column")
+        notes.append("uniform=True has no effect: the record has no time column")
     found = find_outliers(data)
     record = Record(src, data, float(rate) if rate is not None else None, time, notes,
                     log.metadata if log else metadata,
@@ -209,10 +209,10 @@ def parse_scales(texts: Iterable[str]) -> dict[str, float]:
         name, sep, value = (part.strip() for part in text.partition("="))
         factor = number_or_ratio(value) if sep and name else None
         if factor is None:
-            raise InputError(f"--scale {text!r}: expected NAME=FACTOR or NAME=A/B with a finite, "
+            raise InputError(f"scale={text!r}: expected NAME=FACTOR or NAME=A/B with a finite, "
                              "non-zero factor (e.g. gx=1/131)")
         if name in scales:
-            raise InputError(f"--scale: column {name!r} is given twice")
+            raise InputError(f"column {name!r} is given twice in scale=")
         scales[name] = factor
     return scales
 
@@ -264,7 +264,7 @@ def _kept(names: list[str], columns: Sequence[str] | None, scale: Mapping[str, f
     """Return the columns to read (None: all): those asked for, the time and the scaled ones."""
     unknown = [c for c in scale if c not in names]
     if unknown:
-        raise InputError(f"{src}: --scale names no column {unknown[0]!r}"
+        raise InputError(f"{src}: scale= names no column {unknown[0]!r}"
                          f"{did_you_mean(unknown[0], names)}; columns: {', '.join(names)}")
     if columns is None:
         return None

@@ -59,9 +59,9 @@ def handle_outliers(record: Record, found: dict[str, Outliers], mode: str,
     rule = f"|x - median| > {OUTLIER_K:g} x 1.4826 MAD"
     if not found:
         if mode != "keep":
-            record.notes.append(f"--outliers {mode}: no outliers found ({rule})")
+            record.notes.append(f"outliers={mode!r}: no outliers found ({rule})")
         return
-    done = {"keep": "kept (--outliers clip or drop handles them)", "clip": "clipped to",
+    done = {"keep": "kept (outliers='clip' or 'drop' handles them)", "clip": "clipped to",
             "drop": "dropped"}[mode]
     for name, out in found.items():
         bounds = f"[{out.low:.6g}, {out.high:.6g}]"
@@ -78,9 +78,9 @@ def handle_outliers(record: Record, found: dict[str, Outliers], mode: str,
 def _drop_rows(record: Record, rows: np.ndarray) -> None:
     if record.time is None:
         raise InputError(
-            f"{record.source}: --outliers drop would remove {rows.size} sample(s) from a record "
+            f"{record.source}: outliers='drop' would remove {rows.size} sample(s) from a record "
             "without a time column, which breaks the uniform sample spacing the models assume; "
-            "use --outliers clip (or keep)")
+            "use outliers='clip' (or 'keep')")
     keep = np.ones(record.n_samples, dtype=bool)
     keep[rows] = False
     record.data = {name: x[keep] for name, x in record.data.items()}

@@ -47,7 +47,8 @@ class Record:
         """Refuse a record in segments for ``what``, which needs one contiguous run."""
         if self.segments is not None and len(self.segments) > 1:
             raise InputError(f"{self.source}: {what} needs a contiguous record, this one has "
-                             f"{len(self.segments)} segments; pass --fill instead of --segments")
+                             f"{len(self.segments)} segments; pass gaps='fill' instead of "
+                             "gaps='segments'")
 
     source: str
     data: dict[str, np.ndarray]
@@ -87,5 +88,5 @@ class Record:
             The record has no time column and was given no rate.
         """
         if self.rate is None:
-            raise InputError(f"{self.source}: no time column; give the sample rate with --rate HZ")
+            raise InputError(f"{self.source}: no time column; give the sample rate with rate=HZ")
         return self.rate

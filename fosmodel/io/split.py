@@ -96,6 +96,27 @@ class SplitSpec:
     train: tuple[float, str]
     evaluate: tuple[float, str]
 
+    def __post_init__(self) -> None:
+        """Check both lengths: a positive number and a unit each, leaving some to predict.
+
+        Raises
+        ------
+        InputError
+            A length that is not ``(value, unit)`` with a finite value > 0 and a unit among
+            ``s``, ``min``, ``h`` and ``%``, or percents that add up to 100 or more.
+        """
+        for name in ("train", "evaluate"):
+            length = getattr(self, name)
+            value, unit = length if isinstance(length, tuple) and len(length) == 2 else (0, "")
+            if (isinstance(value, bool) or not isinstance(value, (int, float))
+                    or not math.isfinite(value) or value <= 0 or unit not in (*_SECONDS, "%")):
+                raise InputError(f"the {name} length must be (value, unit) with a value > 0 and "
+                                 f"a unit among s, min, h and %, got {length!r}")
+        percent = sum(value for value, unit in (self.train, self.evaluate) if unit == "%")
+        if percent >= 100:
+            raise InputError(f"the split {str(self)!r} takes {percent:g}% of the record for "
+                             "training and evaluation and leaves nothing to predict")
+
     @classmethod
     def parse(cls, text: str) -> SplitSpec:
         """Read ``TRAIN,EVALUATE``, each with its unit: ``180s,180s`` or ``50%,20%``.
@@ -111,10 +132,6 @@ class SplitSpec:
         if len(parsed) != 2 or len(lengths) != 2:
             raise InputError(f"expected TRAIN,EVALUATE with units: durations like 180s,180s "
                              f"(s, min or h) or percents of the record like 50%,20%, got {text!r}")
-        percent = sum(value for value, unit in lengths if unit == "%")
-        if percent >= 100:
-            raise InputError(f"the split {text!r} takes {percent:g}% of the record for training "
-                             "and evaluation and leaves nothing to predict")
         return cls(lengths[0], lengths[1])
 
     def seconds(self, n: int, rate: float) -> tuple[float, float]:

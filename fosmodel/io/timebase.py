@@ -36,7 +36,7 @@ def time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool
     """
     if len(time) < 2:
         if rate is None:
-            raise InputError(f"{src}: a single sample cannot give a rate; pass --rate")
+            raise InputError(f"{src}: a single sample cannot give a rate; pass rate=")
         return rate, time
     dt = np.diff(time)
     step = median(dt)
@@ -51,7 +51,7 @@ def time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool
     if not RATE_RANGE[0] <= measured <= RATE_RANGE[1]:
         raise InputError(f"{src}: column {name!r} gives a sample rate of {measured:.6g} Hz, "
                          f"outside {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} Hz; is it in seconds? "
-                         f"(--scale {name}=0.001 turns milliseconds into seconds)")
+                         f"(scale={{{name!r}: 0.001}} turns milliseconds into seconds)")
     kind = "the effective rate of the bursty time column" if bursty else "the time column"
     if rate is not None and abs(measured - rate) > RATE_TOLERANCE * rate:
         raise InputError(f"{src}: {given_by} disagrees with {kind} ({measured:.6g} Hz)")
@@ -63,15 +63,15 @@ def time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool
                 f"interval {step:.3g} s, mean {np.mean(dt):.3g} s); effective rate "
                 f"{measured:.6g} Hz ((N - 1) / span)")
         if not (uniform or given_by):
-            raise InputError(f"{src}: {said}: pass --uniform to take the samples as uniformly "
-                             "spaced at that rate, or --rate HZ")
+            raise InputError(f"{src}: {said}: pass uniform=True to take the samples as uniformly "
+                             "spaced at that rate, or rate=HZ")
         notes.append(f"{said}: samples taken as uniformly spaced at {rate:.6g} Hz; time is "
                      "sample number / rate")
     elif uniform:
         n_gaps = int(np.count_nonzero(dt > 1.5 * step))
-        notes.append(f"--uniform: samples taken as uniformly spaced at {rate:.6g} Hz, the rate of "
-                     f"column {name!r} ({n_gaps} gap(s) in it ignored); time is sample number / "
-                     "rate")
+        notes.append(f"uniform=True: samples taken as uniformly spaced at {rate:.6g} Hz, the rate "
+                     f"of column {name!r} ({n_gaps} gap(s) in it ignored); time is sample number "
+                     "/ rate")
     if bursty or uniform:
         time = np.arange(len(time)) / rate
     return rate, time
@@ -149,6 +149,6 @@ def _check_gaps(dt: np.ndarray, step: float, src: str, name: str, first_line: in
         raise InputError(
             f"{src}: column {name!r}, {where(i, first_line)}: a gap of {dt[gaps[0]]:.6g} s "
             f"where the sample interval is {step:.6g} s ({gaps.size} gap(s) in the record); "
-            "pass --fill to interpolate across them"
-            + (" or --segments to fit on the pieces" if segments else "")
+            "pass gaps='fill' to interpolate across them"
+            + (" or gaps='segments' to fit on the pieces" if segments else "")
         )

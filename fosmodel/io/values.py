@@ -87,7 +87,7 @@ class _Columns:
             raise InputError(f"{self.src}: too large to read: {total:,} rows of {width} "
                              f"column(s) {verb} {held / 2**30:.1f} GiB as float64, more "
                              f"than the {self.budget / 2**30:.1f} GiB this machine has free; "
-                             "read fewer columns (--column) or a shorter stretch")
+                             "read fewer columns (columns=) or a shorter stretch")
 
     def gathered(self) -> dict[str, np.ndarray]:
         if self.n_rows is not None:
@@ -188,8 +188,8 @@ def apply_scale(data: dict[str, np.ndarray], scale: Mapping[str, float], src: st
     """Multiply each column named in ``scale`` by its factor, and note it."""
     for name, factor in scale.items():  # the names are checked against the header by _kept
         if not (np.isfinite(factor) and factor != 0):
-            raise InputError(f"{src}: --scale {name}={factor!r}: the factor must be finite and "
-                             "non-zero")
+            raise InputError(f"{src}: scale={{{name!r}: {factor!r}}}: the factor must be finite "
+                             "and non-zero")
         with np.errstate(over="ignore"):  # an overflow is reported by check_magnitude
             data[name] = data[name] * factor
     if scale:
@@ -208,7 +208,7 @@ def check_magnitude(data: dict[str, np.ndarray], scale: Mapping[str, float], src
             scaled = f" (scaled by {scale[name]:g})" if name in scale else ""
             raise InputError(f"{src}: column {name!r}, {where(i, first_line)}: {x[i]:g}{scaled} "
                              f"is too large to model (over {MAX_ABS:g} in magnitude); check its "
-                             f"units or pass --scale {name}=FACTOR")
+                             f"units or pass scale={{{name!r}: FACTOR}}")
 
 
 def note_integer_columns(data: dict[str, np.ndarray], known: Collection[str],
@@ -217,7 +217,7 @@ def note_integer_columns(data: dict[str, np.ndarray], known: Collection[str],
     integer = [n for n, x in data.items() if n not in known and _all_integers(x)]
     if integer:
         notes.append(f"column(s) {', '.join(integer)} hold only integers: if they are raw "
-                     f"counts, scale them, e.g. --scale {integer[0]}=1/16384 for 16384 counts "
+                     f"counts, scale them, e.g. scale={{{integer[0]!r}: 1/16384}} for 16384 counts "
                      "per unit")
 
 

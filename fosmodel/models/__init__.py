@@ -6,4 +6,29 @@ AR and Gauss-Markov baselines (also about a local level), their shared linear dy
 free runs.
 
 Imports :mod:`fosmodel.core` and :mod:`fosmodel.typeset` (the summaries they print) only.
+Its public names are imported on first use (:mod:`fosmodel._lazy`).
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import attach
+
+if TYPE_CHECKING:
+    from .baselines import ARModel, GaussMarkovModel
+    from .levelar import LocalLevelAR
+    from .model import FOSModel
+    from .narx_features import NARXFeatures, lagged_rows
+    from .regressor import FOSRegressor
+else:
+    __getattr__, __dir__ = attach(__name__, {
+        "baselines": ("ARModel", "GaussMarkovModel"),
+        "levelar": ("LocalLevelAR",),
+        "model": ("FOSModel",),
+        "narx_features": ("NARXFeatures", "lagged_rows"),
+        "regressor": ("FOSRegressor",),
+    })
+
+__all__ = ["ARModel", "FOSModel", "FOSRegressor", "GaussMarkovModel", "LocalLevelAR",
+           "NARXFeatures", "lagged_rows"]

@@ -164,7 +164,7 @@ def allan_deviation(
                          f"least {MIN_SAMPLES} (one decade of averaging times)")
     if np.ptp(y) == 0.0:
         raise InputError("the signal is constant: its Allan deviation is zero at every tau")
-    ms = _averaging_factors(len(y), rate, taus, per_decade)
+    ms = averaging_factors(len(y), rate, taus, per_decade)
     taus_s, adev, counts = _oadev(y, rate, ms)
     ms = np.round(taus_s * rate).astype(int)
     if np.any(adev <= 0.0):
@@ -251,9 +251,15 @@ def _check_units(sensor: str | None, units: str | None) -> None:
     to_si_scale(sensor, units)
 
 
-def _averaging_factors(n: int, rate: float, taus: ArrayLike | None,
+def averaging_factors(n: int, rate: float, taus: ArrayLike | None,
                        per_decade: int) -> np.ndarray:
-    """Averaging factors ``m`` (tau = m/rate), sorted and unique, within 1 .. n // MIN_CLUSTERS."""
+    """Averaging factors ``m`` (tau = m/rate) of :func:`allan_deviation`, sorted and unique.
+
+    ``taus`` None gives its default grid for a record of ``n`` samples: ``per_decade``
+    log-spaced factors from 1 to ``n // MIN_CLUSTERS``; given ``taus`` (seconds) are rounded
+    to factors and must lie within that range.  Public so that another Allan tool (allantools,
+    a benchmark) can be run on the same averaging times.
+    """
     m_max = n // MIN_CLUSTERS
     if taus is None:
         if per_decade < 1:

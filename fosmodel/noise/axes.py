@@ -77,6 +77,25 @@ class UnitsSpec:
     every: str | None = None
     columns: Mapping[str, str] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        """Check the units, as :meth:`parse` does.
+
+        Raises
+        ------
+        InputError
+            Units that are not a string or that no sensor reads in (the message lists the
+            valid ones), or a column name that is not a string.
+        """
+        given: list[tuple[object, object]] = list(dict(self.columns).items())
+        if self.every is not None:
+            given.insert(0, (None, self.every))  # None: every column
+        for column, units in given:
+            if column is not None and not (isinstance(column, str) and column):
+                raise InputError(f"a column name must be a non-empty string, got {column!r}")
+            if not isinstance(units, str):
+                raise InputError(f"units must be a string such as 'deg/s', got {units!r}")
+            sensor_of(units)  # refuses unknown units, listing the valid ones
+
     @classmethod
     def parse(cls, text: str) -> UnitsSpec:
         """Read ``UNITS`` (every column), ``COLUMN=UNITS,...`` or both, comma-separated.
@@ -189,7 +208,7 @@ def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None,
     names = [spec.split(":")[0] for spec in columns]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
-        raise InputError(f"column {twice[0]!r} is named twice in --columns")
+        raise InputError(f"column {twice[0]!r} is named twice in columns=")
     if not names:
         raise InputError("no columns to analyse")
     stray = [c for c in given.columns if c not in names]

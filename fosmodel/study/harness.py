@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -47,8 +47,9 @@ from numpy.typing import ArrayLike
 
 from ..core.blas import one_blas_thread
 from ..core.exceptions import InputError, UnstableModelWarning
+from ..core.fos import STOP_RULES
 from ..core.levels import levels_for
-from ..core.validation import as_signal
+from ..core.validation import as_signal, check_int, check_positive
 from ..io.split import Split
 from ..models.baselines import METHOD_LABELS, ARModel, GaussMarkovModel, make_baseline
 from ..models.levelar import LocalLevelAR
@@ -110,22 +111,34 @@ class StudyConfig:
         Raises
         ------
         InputError
-            A rate, sensor, units, method, protocol, denoiser, order, degree, horizon or
-            number of starts out of range.
+            A rate, sensor, units, order, degree, method, protocol, segment duration,
+            horizon, number of starts, bias time, denoiser, stopping rule or ``levels`` out of
+            range; an integer option given as a float (``3.0``) or a bool.
         """
         for name in ("orders", "degrees", "methods", "protocols", "taus"):
-            object.__setattr__(self, name, tuple(getattr(self, name)))
-        if not (np.isfinite(self.rate) and self.rate > 0):
-            raise InputError(f"the sample rate must be positive, got {self.rate!r}")
+            value = getattr(self, name)
+            if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
+                raise InputError(f"{name} must be a sequence, got {value!r}")
+            object.__setattr__(self, name, tuple(value))
+        check_positive(self.rate, "rate")
         to_si_scale(self.sensor, self.units)
         _check_choices("method", self.methods, METHODS)
         _check_choices("protocol", self.protocols, PROTOCOLS)
         _check_choices("denoiser", [self.paper_denoise], [d for d in DENOISERS if d != "none"])
+        _check_choices("stopping rule", [self.fos_stop], STOP_RULES)
         for name, values in (("order", self.orders), ("degree", self.degrees)):
-            if not values or any(isinstance(v, bool) or int(v) != v or v < 1 for v in values):
+            if not values or any(isinstance(v, bool) or not isinstance(v, (int, np.integer))
+                                 or v < 1 for v in values):
                 raise InputError(f"every {name} must be an integer >= 1, got {list(values)}")
-        if self.horizon_s <= 0 or self.n_starts < 1:
-            raise InputError("the outage horizon must be positive and n_starts at least 1")
+        for name in ("train_s", "evaluate_s", "horizon_s"):
+            check_positive(getattr(self, name), name)
+        check_int(self.n_starts, "n_starts", 1)
+        if not self.taus:
+            raise InputError("taus must hold at least one bias time in seconds")
+        for tau in self.taus:
+            check_positive(tau, "every tau")
+        if not isinstance(self.levels, (bool, np.bool_)):
+            raise InputError(f"levels must be True or False, got {self.levels!r}")
 
     def configurations(self, protocol: str = "fair") -> list[tuple[str, int, int]]:
         """List every (method, order, degree) to fit under ``protocol``.

@@ -24,6 +24,7 @@ import pandas as pd
 
 from ..core.exceptions import InputError
 from ..core.parallel import in_workers
+from ..core.validation import check_int, check_positive
 from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_covariance
 from ..filter.joint_noise import JointNoise, joint_noise
 from ..filter.statespace import StateSpace
@@ -81,6 +82,34 @@ class ImuConfig:
     min_tau: float | None = None
     inflate: float = 1.0
     n_jobs: int = 2
+
+    def __post_init__(self) -> None:
+        """Check every option, before any record is read.
+
+        The study's grid, segments and outage metrics as :class:`StudyConfig` checks them
+        (with the sensor and rate of any record); the loop's split and lag, the Allan fits'
+        shortest tau and the number of jobs here.
+
+        Raises
+        ------
+        InputError
+            An option out of range; an integer option given as a float (``3.0``) or a bool.
+        """
+        StudyConfig(rate=1.0, sensor="gyro", units="rad/s", orders=self.orders,
+                    degrees=self.degrees, methods=self.methods, protocols=self.protocols,
+                    train_s=self.train_s, evaluate_s=self.evaluate_s, horizon_s=self.horizon_s,
+                    n_starts=self.n_starts)
+        if self.loop_split is not None:  # whether it leaves some to predict: check()
+            split = tuple(self.loop_split) if isinstance(self.loop_split, Sequence) else ()
+            if len(split) != 2:
+                raise InputError("loop_split must be the two fractions of the record the loop "
+                                 f"fits on and evaluates on, got {self.loop_split!r}")
+            for fraction in split:
+                check_positive(fraction, "each loop_split fraction")
+        check_int(self.loop_max_lag, "loop_max_lag", 1)
+        if self.min_tau is not None:
+            check_positive(self.min_tau, "min_tau")
+        check_int(self.n_jobs, "n_jobs", 1)
 
     def study_config(self, rate: float, axis: Axis) -> StudyConfig:
         """Configure the study of one axis."""
@@ -195,10 +224,11 @@ def _too_short(n: int, rate: float, short: Mapping[str, tuple[int | None, str]])
     head = (f"the record has {n} samples ({n / rate:.6g} s at {rate:g} Hz), too short for "
             "these settings")
     if None in least:  # a segment too short for its windows: a longer record cannot help
-        return f"{head}: {needs}; change --split (the loop's: --loop-split) or --horizon"
+        return (f"{head}: {needs}; change train_s= and evaluate_s= (the loop's: loop_split=) "
+                "or horizon_s=")
     head += f", which need at least {max(m for m in least if m) / rate:.6g} s"
-    return (f"{head}: {needs}; shorten --split (the loop's: --loop-split) or --horizon, or "
-            "give a longer record")
+    return (f"{head}: {needs}; shorten train_s= and evaluate_s= (the loop's: loop_split=) or "
+            "horizon_s=, or give a longer record")
 
 
 #: The record's length at the head of a step's own message (the message above says it once).
