@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from .core.candidates import CandidateSpec, Term, count_candidates, generate_terms
     from .core.exceptions import FOSModelError, InputError, NotFittedError, UnstableModelWarning
     from .core.fos import FOSResult, StopRule, fos
+    from .filter.joint_noise import joint_noise
     from .filter.statespace import to_state_space
     from .io.loader import load_record
     from .io.model_file import read_model
@@ -49,6 +50,7 @@ else:
         "models.regressor": ("FOSRegressor",),
         "noise.allan": ("AllanResult", "allan_deviation"),
         "noise.allan_fit": ("NoiseFit", "fit_noise"),
+        "filter.joint_noise": ("joint_noise",),
         "noise.imu_noise": ("imu_noise",),
         "study.harness": ("StudyConfig",),
         "study.runner": ("run_study",),
@@ -61,6 +63,6 @@ __all__ = [
     "FOSResult", "GaussMarkovModel", "ImuConfig", "InputError", "LoopConfig", "NARXFeatures",
     "NoiseFit", "NotFittedError", "StopRule", "StudyConfig", "Term", "UnstableModelWarning",
     "__version__", "allan_deviation", "close_loop", "count_candidates", "fit_noise", "fos",
-    "generate_terms", "imu_noise", "lagged_rows", "load_record", "read_model", "run_fleet",
-    "run_imu", "run_study", "to_state_space",
+    "generate_terms", "imu_noise", "joint_noise", "lagged_rows", "load_record", "read_model",
+    "run_fleet", "run_imu", "run_study", "to_state_space",
 ]

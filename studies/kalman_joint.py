@@ -41,17 +41,11 @@ import numpy as np
 import pandas as pd
 from doc_pages import replace_section
 
-from fosmodel.filter.allan_statespace import initial_covariance
-from fosmodel.filter.joint_noise import JointNoise, joint_noise
-from fosmodel.filter.kalman import KalmanFilter
-from fosmodel.filter.statespace import StateSpace
-from fosmodel.io.loader import Record, load_record
-from fosmodel.io.output import write_tables
-from fosmodel.io.samples import load_mpu6050_static
-from fosmodel.noise.axes import Axis
-from fosmodel.noise.imu_noise import imu_noise
-from fosmodel.noise.metrics import to_si_scale
-from fosmodel.typeset.markdown import markdown_table
+from fosmodel import imu_noise, joint_noise
+from fosmodel.filter import JointNoise, KalmanFilter, StateSpace, initial_covariance
+from fosmodel.io import Record, load_mpu6050_static, load_record, write_tables
+from fosmodel.noise import Axis, to_si_scale
+from fosmodel.typeset import markdown_table
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

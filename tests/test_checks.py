@@ -229,11 +229,11 @@ def test_every_column_not_analysed_is_named_with_why():
     used = ["gx_dps", "gy_dps", "ax_g", "ay_g", "az_g", "temp_c"]
     assert unused_columns(names, used, named=False) == [
         ("zg_dps", "its name tells neither a gyro nor an accelerometer (is it gz_dps?); give its "
-                   "units (--units zg_dps=UNITS) or name it in --columns to use it"),
-        ("status", "its name tells neither a gyro nor an accelerometer; give its units (--units "
-                   "status=UNITS) or name it in --columns to use it")]
-    assert unused_columns(names, used, named=True) == [("zg_dps", "not among --columns"),
-                                                       ("status", "not among --columns")]
+                   "units (units={'zg_dps': UNITS}) or name it in columns= to use it"),
+        ("status", "its name tells neither a gyro nor an accelerometer; give its units (units="
+                   "{'status': UNITS}) or name it in columns= to use it")]
+    assert unused_columns(names, used, named=True) == [("zg_dps", "not among columns="),
+                                                       ("status", "not among columns=")]
 
 
 def test_imu_names_the_column_it_skips(records, tmp_path, capsys):

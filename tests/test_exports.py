@@ -142,9 +142,9 @@ def test_px4_and_ardupilot_take_deviations_per_ekf_step(noise):
 def test_inflation_multiplies_every_value_and_every_file_says_so(noise):
     plain, inflated = noise.export(), noise.export(4.0)
     for name, text in export_files(inflated).items():
-        assert "inflated 4x for a moving platform (--inflate)" in text, name
+        assert "inflated 4x for a moving platform: every value" in text, name
     for name, text in export_files(plain).items():
-        assert "not inflated (--inflate 1)" in text, name
+        assert "not inflated: the static record's values" in text, name
     for a, b in zip(px4_parameters(plain), px4_parameters(inflated)):
         assert b.value == pytest.approx(4.0 * a.value, rel=1e-12)
     assert "Inflated 4x" in noise.matlab_script(4.0)

@@ -22,8 +22,10 @@ _SPELLINGS = (
     (re.compile(_START + r"train_s= and evaluate_s="), "--split"),
     (re.compile(_START + r"horizon_s="), "--horizon"),
     (re.compile(_START + r"uniform=True\b"), "--uniform"),
+    (re.compile(_START + r"static_only=True\b"), "--static-only"),
     (re.compile(_START + r"gaps=([\"'])(fill|segments)\1"), r"--\2"),
     (re.compile(_START + r"scale=\{([\"'])(.*?)\1: (.*?)\}"), r"--scale \2=\3"),
+    (re.compile(_START + r"units=\{([\"'])(.*?)\1: (.*?)\}"), r"--units \2=\3"),
 )
 # outliers="clip" or "drop", outliers="clip" (or "keep"): the flag takes the values bare
 _OUTLIERS = re.compile(_START + r"outliers=([\"']\w+[\"'](?: \(?or [\"']\w+[\"']\)?)*)")

@@ -27,6 +27,7 @@ from .arguments import (
     positive_float,
     positive_int,
 )
+from .flags import with_flags
 from .parsing import parsed
 
 #: The methods of :data:`fosmodel.study.harness.METHODS`, spelt here: importing the harness
@@ -114,7 +115,7 @@ def imu(args: argparse.Namespace) -> int:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
     for column, why in unused_columns(rec.names, [*(a.column for a in axes), *aux],
                                       named=bool(args.columns)):
-        print(f"fosmodel: note: column {column!r} skipped: {why}", file=sys.stderr)
+        print(f"fosmodel: note: column {column!r} skipped: {with_flags(why)}", file=sys.stderr)
     rate = rec.require_rate()
 
     def at(n: int) -> ImuConfig:  # the settings for a record of n samples

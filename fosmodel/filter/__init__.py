@@ -39,6 +39,7 @@ if TYPE_CHECKING:
         recursive_gain,
         steady_state_gain,
     )
+    from .joint_noise import JointNoise
     from .kalman import FilterRun, KalmanFilter, run_filter
     from .statespace import (
         NonlinearStateSpace,
@@ -55,13 +56,14 @@ else:
                    "averaging_angle_std", "averaging_rate_std", "conditional_variance",
                    "constant_gain_filter", "correlation", "covariance", "cross_gyro_comparison",
                    "kalman_angle_std", "recursive_gain", "steady_state_gain"),
+        "joint_noise": ("JointNoise",),
         "kalman": ("FilterRun", "KalmanFilter", "run_filter"),
         "statespace": ("NonlinearStateSpace", "StateSpace", "position_velocity_error_model",
                        "to_nonlinear_state_space", "to_state_space"),
     })
 
 __all__ = [
-    "CORR_EQ_8_8", "CORR_Q3", "CORR_Q5", "ArrayModel", "FilterRun", "KalmanFilter",
+    "CORR_EQ_8_8", "CORR_Q3", "CORR_Q5", "ArrayModel", "FilterRun", "JointNoise", "KalmanFilter",
     "NonlinearStateSpace", "StateSpace", "TermValue", "allan_state_space", "angle_error_std",
     "assemble_axes", "averaging_angle_std", "averaging_rate_std", "conditional_variance",
     "constant_gain_filter", "correlation", "covariance", "cross_gyro_comparison",

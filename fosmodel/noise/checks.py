@@ -276,7 +276,7 @@ def static_part(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: f
                          f"{fewest / rate:.3g} s)")
     if not static_only:
         raise InputError(f"{source}: the record is not static: {found.describe_motion()}; an "
-                         f"Allan analysis needs the sensor at rest: pass --static-only to "
+                         f"Allan analysis needs the sensor at rest: pass static_only=True to "
                          f"analyse its longest static stretch ({longest[0] / rate:.4g}-"
                          f"{longest[1] / rate:.4g} s)")
     first, end = longest
@@ -348,11 +348,11 @@ def unused_columns(names: Sequence[str], used: Sequence[str],
         if column in used:
             continue
         if named:
-            out.append((column, "not among --columns"))
+            out.append((column, "not among columns="))
             continue
         out.append((column, "its name tells neither a gyro nor an accelerometer"
-                    + _swapped(column) + f"; give its units (--units {column}=UNITS) or name "
-                    "it in --columns to use it"))
+                    + _swapped(column) + f"; give its units (units={{'{column}': UNITS}}) or name "
+                    "it in columns= to use it"))
     return out
 
 

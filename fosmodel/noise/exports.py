@@ -106,10 +106,10 @@ class NoiseExport:
 
     def header(self, comment: str, target: str) -> list[str]:
         """Return the lines every file starts with: what it is, from what, and the inflation."""
-        inflation = (f"inflated {self.inflate:g}x for a moving platform (--inflate): every value "
+        inflation = (f"inflated {self.inflate:g}x for a moving platform: every value "
                      f"below is {self.inflate:g} times the static record's"
                      if self.inflate != 1.0 else
-                     "not inflated (--inflate 1): the static record's values; a moving "
+                     "not inflated: the static record's values; a moving "
                      "platform usually needs more (vibration, scale and misalignment errors)")
         return [f"{comment} IMU noise for {target}, from the Allan deviation of {self.source} "
                 f"({', '.join(self.columns)}) by fosmodel {__version__}.",

@@ -245,9 +245,9 @@ class ImuNoise:
         """MATLAB ``gyroparams``/``accelparams`` (per axis, SI, times ``inflate``), imuSensor."""
         lines = [f"% IMU noise from the Allan deviation of {Path(self.source).name} by fosmodel "
                  f"{__version__}.",
-                 (f"% Inflated {inflate:g}x for a moving platform (--inflate): every value is "
+                 (f"% Inflated {inflate:g}x for a moving platform: every value is "
                   f"{inflate:g} times the static record's." if inflate != 1.0 else
-                  "% Not inflated (--inflate 1): the static record's values."),
+                  "% Not inflated: the static record's values."),
                  "% NoiseDensity = N, BiasInstability = B (the IEEE Std 952 flicker coefficient, "
                  "Allan floor 0.664 B), RandomWalk = K;",
                  "% one value per axis in the order given, or the largest over the axes when a "
@@ -386,7 +386,7 @@ def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str,
     paths = write_tables(noise.table(), out_dir, "noise",
                          f"{title}: IEEE Std 952 noise terms of every axis", report=title)
     paths += write_tables(noise.si_table(), out_dir, "noise_si",
-                          f"{title}: the noise terms in SI units, before any --inflate",
+                          f"{title}: the noise terms in SI units, before any inflation",
                           report=title)
     for sensor, fig in noise.figures().items():
         fig.suptitle(title)
