@@ -3,7 +3,9 @@
 A thin layer over the library: :mod:`.parser` holds the grammar, :mod:`.commands` one
 short function per command over public library functions, and :func:`main` the exit codes:
 0 success, 2 bad input or usage (one-line message on stderr), 1 internal error (with a
-hint to report it; ``--verbose`` shows the traceback), 130 interrupted.
+hint to report it; ``--verbose`` shows the traceback), 130 interrupted.  A command's outputs
+are published together (:func:`fosmodel.io.journal.all_or_nothing`): when it fails, those it
+already put in place are undone.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import traceback
 import warnings
 
 from ..core.exceptions import InputError
+from ..io.journal import all_or_nothing
 from ..io.sensor_log import TopicError
 from .parser import build_parser
 
@@ -42,7 +45,8 @@ def _run(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="fosmodel: %(message)s", stream=sys.stderr)
     try:
-        return args.func(args)
+        with all_or_nothing():
+            return args.func(args)
     except InputError as exc:
         message = exc.with_flag() if isinstance(exc, TopicError) else str(exc)
         print(f"fosmodel: error: {' '.join(message.split())}", file=sys.stderr)

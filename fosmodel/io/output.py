@@ -9,9 +9,13 @@ directory is written beside its destination and moved into place in one step
 (:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
 that no output names a file the command reads, however the two are spelt.
 :func:`writable_file` and :func:`writable_directory` check an output's path before anything
-is read.  :func:`write_tables` and :func:`save_figure` write a table (Markdown, CSV,
-LaTeX with booktabs rules, a caption and a label) and a figure (a 300 dpi PNG and an SVG, plain
-tick labels on a log axis of less than two decades) that way.
+is read, and that its directory can be written.  An operating system's refusal to write (a
+read-only folder, a full disk, a directory where a file goes) is an :class:`InputError`
+naming the output, its temporary files removed; the command line publishes a command's
+outputs all or none (:mod:`fosmodel.io.journal`).  :func:`write_tables` and
+:func:`save_figure` write a table (Markdown, CSV, LaTeX with booktabs rules, a caption and a
+label) and a figure (a 300 dpi PNG and an SVG, plain tick labels on a log axis of less than
+two decades) that way.
 """
 
 from __future__ import annotations
@@ -28,9 +32,10 @@ from typing import IO, TYPE_CHECKING
 
 import numpy as np
 
-from ..core.exceptions import InputError
+from ..core.exceptions import InputError, error_line
 from ..models.latex import latex_table, table_label
 from ..models.summary import markdown_table
+from . import journal
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -83,13 +88,14 @@ def writable_file(path: str | os.PathLike[str]) -> Path:
     Raises
     ------
     InputError
-        If its directory does not exist, or it is a directory.
+        If its directory does not exist or cannot be written, or it is a directory.
     """
     out = Path(path)
     if not out.parent.is_dir():
         raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
     if out.is_dir():
         raise InputError(f"cannot write {out}: it is a directory")
+    _check_writable(out, out.parent)
     return out
 
 
@@ -99,12 +105,47 @@ def writable_directory(path: str | os.PathLike[str]) -> Path:
     Raises
     ------
     InputError
-        If it is a file.
+        If it is a file, or it (or the folder it is to be made in) cannot be written.
     """
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise InputError(f"cannot write a report into {out}: it is a file, not a directory")
+    base = out
+    while not base.is_dir():  # itself, or where it will be made
+        base = base.parent
+    _check_writable(out, base)
     return out
+
+
+def _check_writable(out: Path, directory: Path) -> None:
+    """Refuse an output whose ``directory`` the process may not write (or enter)."""
+    if os.access(directory, os.W_OK | os.X_OK):
+        return
+    with contextlib.suppress(OSError):
+        if os.statvfs(directory).f_flag & os.ST_RDONLY:
+            raise InputError(f"cannot write {out}: {directory} is on a read-only file system")
+    raise InputError(f"cannot write {out}: permission denied on directory {directory}")
+
+
+class OutputError(InputError):
+    """The operating system refused to write an output: ``cannot write PATH: REASON``."""
+
+    def __init__(self, path: Path, reason: str) -> None:
+        super().__init__(f"cannot write {path}: {reason}")
+        self.path, self.reason = path, reason
+
+
+def _cannot_write(path: Path, exc: OSError, staging: Path | None = None) -> OutputError:
+    """Return the one-line error of the system's refusal to write ``path``.
+
+    A file of a report staged in ``staging`` is named in the reason, by its place in it.
+    """
+    reason = exc.strerror or error_line(exc)
+    name = Path(exc.filename) if isinstance(exc.filename, str) else None
+    if staging is not None and name is not None and name.is_relative_to(staging) \
+            and name != staging:
+        reason += f" ({name.relative_to(staging)})"
+    return OutputError(path, reason)
 
 
 def _temporary_name(path: Path, suffix: str) -> Path:
@@ -161,10 +202,13 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
     if mode not in ("w", "wb"):
         raise ValueError(f"mode must be 'w' or 'wb', not {mode!r}")
     path = Path(path)
-    for item in _stale(path, ".tmp"):  # left behind by a killed run
+    for item in [*_stale(path, ".tmp"), *_stale(path, journal.KEPT)]:  # of a killed run
         _remove(item)
     tmp = _temporary_name(path, ".tmp")
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
+    except OSError as exc:
+        raise _cannot_write(path, exc) from None
     try:
         fh = (os.fdopen(fd, "w", encoding="utf-8", newline="") if mode == "w"
               else os.fdopen(fd, "wb"))
@@ -172,10 +216,12 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
+        journal.replace(tmp, path)
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError):  # the disk full, a directory where the file goes, ...
+            raise _cannot_write(path, exc) from None
         raise
 
 
@@ -211,26 +257,42 @@ def report_directory(out: str | os.PathLike[str],
     for item in _stale(target, ".tmpdir"):
         _remove(item)
     tmp = _temporary_name(target, ".tmpdir")
-    tmp.mkdir()
+    try:
+        tmp.mkdir()
+    except OSError as exc:
+        raise _cannot_write(out, exc) from None
     try:
         yield tmp
         publish(tmp, out, protected)
+    except OutputError as exc:  # a file of the report: named by its place in the report
+        if not exc.path.is_relative_to(tmp):
+            raise
+        raise OutputError(out, f"{exc.reason} ({exc.path.relative_to(tmp)})") from None
+    except OSError as exc:
+        raise _cannot_write(out, exc, tmp) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
 def publish(tmp: Path, out: Path, protected: Iterable[str | os.PathLike[str]] = ()) -> None:
-    """Move the files of ``tmp`` onto ``out``, after checking none replaces a ``protected`` file.
+    """Move the files of ``tmp`` onto ``out``, after checking that each can take its place.
 
-    A file that would is named in an InputError, and nothing is moved.
+    A file that would replace a ``protected`` file, or a directory, and a folder that would
+    replace a file, are named in an InputError, and nothing is moved.
     """
     protected = list(protected)
     for item in tmp.rglob("*"):
         target = out / item.relative_to(tmp)
+        if not target.exists():
+            continue
         for source in protected:
-            if target.exists() and same_file(target, source):
+            if same_file(target, source):
                 raise InputError(f"writing the report into {out} would replace {source}, a "
                                  "file this command reads; choose another output directory")
+        if item.is_dir() != target.is_dir():
+            raise InputError(f"cannot write the report into {out}: {target} is "
+                             f"{'a file' if item.is_dir() else 'a directory'}, where the report "
+                             f"has {'a folder' if item.is_dir() else 'a file'} of that name")
     _move(tmp, out)
 
 
@@ -241,10 +303,13 @@ def _move(tmp: Path, out: Path) -> None:
             if item.is_dir() and target.is_dir():
                 _move(item, target)
             else:
-                os.replace(item, target)
+                journal.replace(item, target)
     else:
+        missing = [d for d in reversed(out.parents) if not d.exists()]
         out.parent.mkdir(parents=True, exist_ok=True)
-        os.replace(tmp, out)
+        for folder in missing:
+            journal.created(folder)
+        journal.replace(tmp, out)
 
 
 def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str, caption: str | None = None,

@@ -6,10 +6,12 @@ the model-order study and the residual loop, as :func:`fosmodel.workflows.imu.ru
 them) and its results are written to the store, in a folder of its own published in one
 rename with its completion marker inside.  A rerun skips the records whose marker is there
 and matches the file and the configuration, so an interrupted run resumes without redoing
-them.  The tasks run one after the other in this process, or on the workers of a Dask
-client (:func:`fosmodel.study.runner.dask_client`); each limits BLAS to one thread, so both
-give the same bits.  On a cluster, the workers read the records and write the store: both
-must be on a file system they share with this process.
+them; a record's folder stays whatever happens to the others (it is published outside the
+command line's all-or-nothing, :func:`fosmodel.io.journal.durable`).  The tasks run one
+after the other in this process, or on the workers of a Dask client
+(:func:`fosmodel.study.runner.dask_client`); each limits BLAS to one thread, so both give the
+same bits.  On a cluster, the workers read the records and write the store: both must be on
+a file system they share with this process.
 
 Layout of the store::
 
@@ -33,6 +35,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from ..core.exceptions import InputError
+from ..io.journal import durable
 from ..io.output import write_tables
 from .fleet_record import MARKER, FleetConfig, fingerprint, record_name, run_record
 from .imu import STEPS
@@ -98,7 +101,7 @@ def run_fleet(
     todo.sort(key=lambda n: -_size(names[n]))  # longest first: the last task is a short one
     failures: dict[str, BaseException] = {}
     with tqdm(total=len(names), initial=len(names) - len(todo), disable=not progress,
-              file=sys.stderr, desc="fleet", unit="record") as bar:
+              file=sys.stderr, desc="fleet", unit="record") as bar, durable():
         for name, error in _run(todo, names, store, config, client):
             if error is not None:
                 failures[name] = error
