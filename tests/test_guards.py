@@ -429,3 +429,20 @@ def test_a_real_full_disk_and_a_real_read_only_folder(tmp_path, options, said):
         assert err[0].startswith(f"fosmodel: error: cannot write {argv[-1]}: ") and said in err[0]
         assert out.stdout.splitlines()[-1] == "left:"  # nothing in the mount
 
+
+def test_ctrl_c_while_the_libraries_load_is_one_line(tmp_path):
+    """Ctrl-C in the first seconds (numpy, pandas and scikit-learn loading) printed a traceback."""
+    pd.DataFrame({"time": np.arange(100) / 100.0, "gx": np.arange(100.0) % 7}).to_csv(
+        tmp_path / "r.csv", index=False)
+    argv = [sys.executable, "-X", "importtime", "-m", "fosmodel.cli", "close-loop",
+            str(tmp_path / "r.csv"), "--column", "gx", "--out", str(tmp_path / "loop")]
+    with subprocess.Popen(argv, stderr=subprocess.PIPE, text=True) as proc:
+        for line in proc.stderr:  # the command line's guard is in place once numpy loads
+            if line.split("|")[-1].strip() == "numpy":
+                break
+        proc.send_signal(signal.SIGINT)
+        err = [line for line in proc.stderr.read().splitlines()
+               if not line.startswith("import time:")]
+        assert proc.wait(timeout=60) == 130
+    assert err == ["fosmodel: interrupted"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv"]
