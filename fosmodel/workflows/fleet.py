@@ -7,11 +7,12 @@ them) and its results are written to the store, in a folder of its own published
 rename with its completion marker inside.  A rerun skips the records whose marker is there
 and matches the file and the configuration, so an interrupted run resumes without redoing
 them; a record's folder stays whatever happens to the others (it is published outside the
-command line's all-or-nothing, :func:`fosmodel.io.journal.durable`).  The tasks run one
-after the other in this process, or on the workers of a Dask client
-(:func:`fosmodel.study.runner.dask_client`); each limits BLAS to one thread, so both give the
-same bits.  On a cluster, the workers read the records and write the store: both must be on
-a file system they share with this process.
+command line's all-or-nothing, :func:`fosmodel.io.journal.durable`).  A record refused
+leaves nothing: no folder, no marker (the error names it; a rerun does it again), and a fleet
+refused whole leaves no store.  The tasks run one after the other in this process, or on
+the workers of a Dask client (:func:`fosmodel.study.runner.dask_client`); each limits BLAS to
+one thread, so both give the same bits.  On a cluster, the workers read the records and write
+the store: both must be on a file system they share with this process.
 
 Layout of the store::
 
@@ -94,8 +95,7 @@ def run_fleet(
     config = config or FleetConfig()
     names = _names(files)
     _check_steps(config.steps)
-    store = Path(store)
-    store.mkdir(parents=True, exist_ok=True)
+    store = Path(store)  # made with the first record stored: a fleet refused whole leaves none
     prints = {name: fingerprint(path, config) for name, path in names.items()}
     todo = [n for n in names if not _finished(store / n, prints[n])]
     todo.sort(key=lambda n: -_size(names[n]))  # longest first: the last task is a short one
