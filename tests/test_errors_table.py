@@ -8,9 +8,11 @@ conftest's fixtures); a row without a builder, or a builder without a row,
 fails, so that the table and the code cannot drift apart.
 """
 
+import errno
 import gzip
 import itertools
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -114,6 +116,36 @@ def _report_over_input(tmp):
             "--split", "30s,20s", "--no-levels", "--out", str(tmp)]
 
 
+def _model_edit(tmp, edit):
+    """``predict`` with a model file whose fitted state ``edit`` changes (in place)."""
+    def edited(data):
+        edit(data["fitted"])
+        return data
+    return _predict(tmp, _record(), _model(tmp, edited))
+
+
+def _twice(fitted):
+    """Repeat the terms, and each list of the fitted state that has one entry per term."""
+    for key in ("terms", "coef", "coef_se", "q", "mse_path"):
+        fitted[key] = fitted[key] * 2
+
+
+def _large_model(tmp):
+    with open(tmp / "m.json", "wb") as fh:  # sparse: its size says it all
+        fh.truncate(17 * 2**20)
+    return _predict(tmp, _record(), str(tmp / "m.json"))
+
+
+def _device_model(tmp):
+    (tmp / "m.json").symlink_to("/dev/zero")
+    return _predict(tmp, _record(), str(tmp / "m.json"))
+
+
+def _folder_in_the_report(tmp):
+    (tmp / "report" / "allan.md").mkdir(parents=True)
+    return _report("allan", tmp, _write(tmp, _record(3000)))
+
+
 def _report(command, tmp, path, *extra):
     """``study``, ``close-loop`` or ``allan`` on ``path``, with a report directory."""
     study = ["--sensor", "gyro", "--units", "deg/s"] if command == "study" else []
@@ -193,6 +225,16 @@ BUILDERS = {
         lambda tmp: _predict(tmp, _record(), _model(tmp, lambda d: {**d, "format_version": 99})),
     "model file of another kind":
         lambda tmp: _predict(tmp, _record(), _write(tmp, '{"rows": []}', "m.json")),
+    "model file that is a FIFO, a device or a directory": _device_model,
+    "model file over 16 MiB": _large_model,
+    "model file nested too deep":
+        lambda tmp: _predict(tmp, _record(), _write(tmp, "[" * 50 + "]" * 50, "m.json")),
+    "model file with a term outside its candidate set":
+        lambda tmp: _model_edit(tmp, lambda f: f.update(terms=["y[n-1000000000000]"])),
+    "model file with a term twice": lambda tmp: _model_edit(tmp, _twice),
+    "model file with a weight no fit gives":
+        lambda tmp: _model_edit(tmp, lambda f: f.update(coef=[1e12] * len(f["coef"]))),
+    "a folder where a file of the report goes": _folder_in_the_report,
     "output directory missing":
         lambda tmp: _fit(tmp, _record())[:-1] + [str(tmp / "none" / "m.json")],
     "output file is a directory": lambda tmp: _fit(tmp, _record())[:-1] + [str(tmp)],
@@ -228,11 +270,39 @@ FILE_BUILDERS = {
 }
 
 
+def _read_only(tmp, monkeypatch):
+    """A folder the process may not write: its mode, and where that does not bind (root), as
+    the system would answer."""
+    folder = tmp / "locked"
+    folder.mkdir(mode=0o555)
+    real = os.access
+    monkeypatch.setattr("fosmodel.io.output.os.access",
+                        lambda path, mode: real(path, mode) and Path(path) != folder)
+    return _fit(tmp, _record())[:-1] + [str(folder / "m.json")]
+
+
+def _full_disk(tmp, monkeypatch):
+    """The disk fills as the model is written (simulated: its fsync is refused)."""
+    def fsync(fd):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr("fosmodel.io.output.os.fsync", fsync)
+    return _fit(tmp, _record())
+
+
+# Problems the system raises, simulated where a test cannot make them (the monkeypatch fixture)
+PATCHED_BUILDERS = {
+    "output folder not writable": _read_only,
+    "disk full while writing an output": _full_disk,
+}
+
+
 def _build(problem, tmp, request):
     """The command line of ``problem``'s row, its input written into ``tmp``."""
     if problem in FILE_BUILDERS:
         fixture, build = FILE_BUILDERS[problem]
         return build(tmp, request.getfixturevalue(fixture))
+    if problem in PATCHED_BUILDERS:
+        return PATCHED_BUILDERS[problem](tmp, request.getfixturevalue("monkeypatch"))
     return BUILDERS[problem](tmp)
 
 
@@ -253,12 +323,12 @@ def test_the_readme_has_the_errors_table():
 
 
 def test_every_builder_has_a_row():
-    assert sorted({*BUILDERS, *FILE_BUILDERS} - {row[0] for row in ROWS}) == []
+    assert sorted({*BUILDERS, *FILE_BUILDERS, *PATCHED_BUILDERS} - {row[0] for row in ROWS}) == []
 
 
 @pytest.mark.parametrize("problem, shown, code", ROWS, ids=[row[0] for row in ROWS])
 def test_each_row_of_the_errors_table(problem, shown, code, tmp_path, capsys, request):
-    assert problem in {*BUILDERS, *FILE_BUILDERS}, (
+    assert problem in {*BUILDERS, *FILE_BUILDERS, *PATCHED_BUILDERS}, (
         f"no test builds the documentation's error row {problem!r}")
     argv = _build(problem, tmp_path, request)
     capsys.readouterr()  # what building printed

@@ -151,7 +151,8 @@ CASES = {
     "coef-nan": ("lags", _with("fitted/coef/0", float("nan")),
                  "fitted.coef[0]: nan is not a finite number"),
     "coef-gain": ("lags", _with("fitted/coef/0", 2e6),
-                  "fitted.coef[0]: the weight 2e+06 of 'y[n-1]' is 2e+06 times"),
+                  "fitted.coef[0]: the weight 2e+06 of 'y[n-1]' is beyond any fit's: "
+                  "abs(w) s^(d-1) = 2e+06"),
     "intercept-inf": ("lags", _with("fitted/intercept", float("inf")),
                       "fitted.intercept: inf is not a finite number"),
     "se-count": ("lags", lambda d: d["fitted"]["coef_se"].pop(), "fitted.coef_se: 1 values"),

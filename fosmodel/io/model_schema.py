@@ -299,10 +299,10 @@ def _check_numbers(fitted: Mapping[str, Any], params: Mapping[str, Any], version
         if all(ch == OUTPUT or is_level(ch) for ch, _ in term.factors):
             gain = abs(weight) * spread ** (term.degree - 1)
             if not gain <= MAX_GAIN:
-                _refuse(f"fitted.coef[{i}]", f"the weight {weight:g} of {name!r} is "
-                        f"{gain:.3g} times the output's training spread "
-                        f"(sqrt(fitted.mse_null) = {spread:.3g}) to the power of its degree "
-                        f"less one; no fit gives more than {MAX_GAIN:g}")
+                _refuse(f"fitted.coef[{i}]", f"the weight {weight:g} of {name!r} is beyond any "
+                        f"fit's: abs(w) s^(d-1) = {gain:.3g}, with s = {spread:.3g} the output's "
+                        f"training spread (sqrt(fitted.mse_null)) and d = {term.degree} its "
+                        f"degree; fits give at most {MAX_GAIN:g}")
 
 
 def _value(field: str, value: object, *, nan: bool = False, positive: bool = False) -> None:
