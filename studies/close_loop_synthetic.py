@@ -33,7 +33,7 @@ from data_synth.true_effects import true_effects
 from fosmodel.loop.closeloop import LoopConfig, close_loop, score_family
 from fosmodel.loop.effects import CandidateFamily, Effect
 from fosmodel.loop.loop_report import write_loop_report
-from fosmodel.models.summary import markdown_table
+from fosmodel.typeset.markdown import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "close_loop"
 # (record name, scenario, overrides)

@@ -11,8 +11,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from ..io.output import save_figure, write_tables, write_text
-from ..models.latex import mathtext_units
-from ..models.summary import markdown_table
+from ..typeset.latex import mathtext_units
+from ..typeset.markdown import markdown_table
 from .closeloop import LoopResult, worse_metrics
 from .diagnose import Finding
 from .judge import MIN_GAIN, MIN_HALF_WINDOWS

@@ -60,6 +60,7 @@ from ..core.levels import (
     with_levels,
 )
 from ..core.validation import as_channels, as_signal, check_fitted
+from ..typeset.summary import Summary
 from .dynamics import (
     ar_free_run,
     ar_roots,
@@ -70,7 +71,6 @@ from .dynamics import (
 )
 from .freerun import run_many, run_one, split_expansion
 from .rawform import expand_centred
-from .summary import Summary
 
 log = logging.getLogger(__name__)
 
