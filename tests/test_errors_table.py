@@ -196,6 +196,10 @@ BUILDERS = {
     "constant record":
         lambda tmp: _fit(tmp, "time,gx\n" + "".join(f"{k / 100},1\n" for k in range(50))),
     "a compressed file that expands far": _bomb,
+    "a compressed line that does not end":
+        lambda tmp: _fit(tmp, gzip.compress(b"gx\n1\n" + b"0" * 20 * 2**20, 9), "--rate",
+                         "100", name="rec.csv.gz"),
+    "a header longer than 1 MiB": lambda tmp: _fit(tmp, "g" * 2**20 + "x\n1\n2\n"),
     "time that does not advance over a block": _still_time,
     "a device, FIFO or socket as the record": _device,
     "an output naming a file the command reads":

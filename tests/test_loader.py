@@ -520,3 +520,14 @@ def test_a_gap_is_refused_offering_what_the_caller_can_take(tmp_path, gaps, offe
     with pytest.raises(InputError) as err:
         load_record(path, gaps=gaps)
     assert str(err.value) == message
+
+
+def test_header_names_are_read_without_the_spaces_around_them(tmp_path):
+    """``time, gx ,temp`` was refused: "no column 'gx' (did you mean 'gx '?)"."""
+    p = _csv(tmp_path, "time, gx ,temp\n0, 1.5 ,20\n0.01,2.5,20.1\n0.02,3.5,20.2\n")
+    rec = load_record(p, columns=["gx"])
+    assert rec.names == ["gx"] and rec.column("gx").tolist() == [1.5, 2.5, 3.5]
+    assert load_record(p).names == ["gx", "temp"]
+    with pytest.raises(InputError, match=r"column name 'gx' appears 2 times in the header "
+                                         r"\(columns 2, 3\)"):
+        load_record(_csv(tmp_path, "time,gx, gx \n0,1,2\n0.01,2,3\n", "twice.csv"))

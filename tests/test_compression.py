@@ -18,12 +18,12 @@ import pandas as pd
 import pytest
 
 from fosmodel.core.exceptions import InputError
-from fosmodel.io.bounded import (
+from fosmodel.io.compression import (
     EXPANSION_FLOOR,
     HEAD_BYTES,
     MAX_LINE,
     BoundedStream,
-    bounded_source,
+    capped_source,
     head_lines,
 )
 
@@ -52,7 +52,7 @@ import json, re, sys
 from pathlib import Path
 import pandas as pd
 from fosmodel.core.exceptions import InputError
-from fosmodel.io.bounded import bounded_source, head_lines
+from fosmodel.io.compression import capped_source, head_lines
 
 def peak():
     with open("/proc/self/status") as fh:
@@ -65,7 +65,7 @@ for name in sys.argv[1:]:
         fh.write("5")
     head = sum(map(len, head_lines(path, 51)))
     try:
-        with bounded_source(path) as source:
+        with capped_source(path) as source:
             for block in pd.read_csv(source, chunksize=500_000, low_memory=False):
                 pass
         error = None
@@ -104,13 +104,13 @@ def test_a_record_reads_whole_through_the_stream(tmp_path):
     path = tmp_path / "r.csv.gz"
     with gzip.open(path, "wt") as fh:
         fh.write("Fs,100\n" + frame.to_csv(index=False))
-    with bounded_source(path) as source:
+    with capped_source(path) as source:
         pd.testing.assert_frame_equal(pd.read_csv(source, skiprows=1), frame)
     assert head_lines(path, 2) == ["Fs,100\n", "time,gx\n"]
     plain = tmp_path / "r.csv"
     plain.write_bytes(b"a\r\nb\rc\n")
     assert head_lines(plain, 5) == ["a\r\n", "b\r", "c\n"]
-    with bounded_source(plain) as source:
+    with capped_source(plain) as source:
         assert source == plain
 
 
