@@ -165,6 +165,8 @@ BUILDERS = {
     "header only": lambda tmp: _fit(tmp, "time,gx\n"),
     "non-numeric cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,abc\n"),
     "empty or NaN cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,\n"),
+    "column of booleans as a signal":
+        lambda tmp: _fit(tmp, "time,gx\n0,True\n0.01,False\n0.02,True\n"),
     "infinite cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,-inf\n"),
     "value too large to compute with": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,1e308\n"),
     "time repeats": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,2\n0.01,3\n"),

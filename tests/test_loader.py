@@ -1,4 +1,5 @@
 import gzip
+import importlib.util
 
 import numpy as np
 import pandas as pd
@@ -531,3 +532,27 @@ def test_header_names_are_read_without_the_spaces_around_them(tmp_path):
     with pytest.raises(InputError, match=r"column name 'gx' appears 2 times in the header "
                                          r"\(columns 2, 3\)"):
         load_record(_csv(tmp_path, "time,gx, gx \n0,1,2\n0.01,2,3\n", "twice.csv"))
+
+
+def test_booleans_are_no_signal(tmp_path):
+    """A column of True/False was modelled as a signal of ones and zeros."""
+    t = np.arange(50) / 100
+    flags = np.arange(50) % 3 == 0
+    pd.DataFrame({"time": t, "gx": np.sin(t), "ok": flags}).to_csv(tmp_path / "r.csv",
+                                                                    index=False)
+    (tmp_path / "gaps.csv").write_text("time,gx,ok\n0,1,True\n0.01,2,\n0.02,3,false\n")
+    s = np.zeros(50, dtype=[("time", float), ("gx", float), ("ok", bool)])
+    s["time"], s["gx"], s["ok"] = t, np.sin(t), flags
+    np.save(tmp_path / "r.npy", s)
+    np.save(tmp_path / "plain.npy", flags)
+    files = {"r.csv": "(True/False)", "gaps.csv": "(True/False)", "r.npy": "(True/False)",
+             "plain.npy": "(True/False)"}
+    if importlib.util.find_spec("pyarrow") is not None:
+        pd.DataFrame({"time": t, "gx": np.sin(t), "ok": flags}).to_parquet(tmp_path / "r.parquet")
+        files["r.parquet"] = "(True/False)"
+    for name in files:
+        column = "c0" if name == "plain.npy" else "ok"
+        with pytest.raises(InputError, match=rf"{name}: column '{column}' holds booleans "
+                                             r"\(True/False\), not a sensor's readings"):
+            load_record(tmp_path / name, columns=[column], rate=100)
+    assert load_record(tmp_path / "r.csv", columns=["gx"]).names == ["gx"]  # left unread
