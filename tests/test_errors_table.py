@@ -176,7 +176,9 @@ BUILDERS = {
     "gap in time with `study`, `close-loop`, `allan`, `imu` or `fleet`":
         lambda tmp: _report("allan", tmp, _gappy(tmp)),
     "`--rate` disagreeing with the time column": lambda tmp: _fit(tmp, _record(), "--rate", "50"),
-    "time column in nanoseconds": lambda tmp: _fit(tmp, "time,gx\n0,1\n1e7,2\n2e7,3\n"),
+    "time column at a rate no IMU has": lambda tmp: _fit(tmp, "time,gx\n0.5,1\n2.5,2\n4.5,3\n"),
+    "time column at no rate at all": lambda tmp: _fit(tmp, "time,gx\n0,1\n1e-12,2\n2e-12,3\n"),
+    "preamble rate no IMU has": lambda tmp: _fit(tmp, "Fs,0.5\ngx\n1\n2\n3\n"),
     "one sample and no `--rate`": lambda tmp: _fit(tmp, "time,gx\n0,1\n"),
     "no time column and no `--rate`": lambda tmp: _report("allan", tmp, _write(tmp, "gx\n1\n2\n")),
     "missing or misspelt column": lambda tmp: _fit(tmp, _record(), "--column", "g_x"),

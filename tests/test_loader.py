@@ -556,3 +556,45 @@ def test_booleans_are_no_signal(tmp_path):
                                              r"\(True/False\), not a sensor's readings"):
             load_record(tmp_path / name, columns=[column], rate=100)
     assert load_record(tmp_path / "r.csv", columns=["gx"]).names == ["gx"]  # left unread
+
+
+@pytest.mark.parametrize("name, per_second, origin", [
+    ("time", 1000, 0), ("time", 1000, 1_704_067_200_000), ("timestamp", 10**6, 5_000_000),
+    ("time", 10**9, 1_704_067_200 * 10**9), ("time_ms", 1000, 0), ("t_us", 10**6, 0),
+    ("timestamp_ns", 10**9, 0),
+])
+def test_integer_timestamps_are_read_in_their_unit(tmp_path, name, per_second, origin):
+    """Integer milliseconds (a common logger format) were read as seconds: 0.1 Hz, fitted."""
+    stamps = origin + (per_second // 100) * np.arange(300, dtype=np.int64)  # 100 Hz
+    gx = np.sin(np.arange(300) / 7)
+    pd.DataFrame({name: stamps, "gx": gx}).to_csv(tmp_path / "r.csv", index=False)
+    rec = load_record(tmp_path / "r.csv")
+    assert rec.rate == pytest.approx(100.0, rel=1e-5)
+    np.testing.assert_allclose(rec.time - rec.time[0], np.arange(300) / 100, atol=1e-6)
+    unit = {1000: "milliseconds", 10**6: "microseconds", 10**9: "nanoseconds"}[per_second]
+    assert any(note.startswith(f"column {name!r} read in {unit} (") for note in rec.notes)
+    scaled = load_record(tmp_path / "r.csv", scale={name: 1 / per_second})  # the user's word
+    assert scaled.rate == pytest.approx(100.0, rel=1e-5)
+    assert not any("read in" in note for note in scaled.notes)
+
+
+def test_a_rate_no_imu_has_is_refused_unless_given(tmp_path):
+    p = _csv(tmp_path, "time,gx\n" + "".join(f"{2.5 * k},{k % 3}\n" for k in range(20)))
+    with pytest.raises(InputError, match=r"column 'time' gives a sample rate of 0.4 Hz, outside "
+                                         r"the 1 Hz to 100 kHz an IMU samples at; if that is the "
+                                         r"record's rate, confirm it with --rate 0.4"):
+        load_record(p)
+    assert load_record(p, rate=0.4).rate == 0.4
+    q = _csv(tmp_path, "Fs,200000\ngx\n1\n2\n3\n", "fast.csv")
+    with pytest.raises(InputError, match=r"the preamble's Fs,200000 \(line 1\) gives a sample "
+                                         r"rate of 200000 Hz, outside"):
+        load_record(q)
+    assert load_record(q, rate=2e5).rate == 2e5
+    assert load_record(_csv(tmp_path, "gx\n1\n2\n", "none.csv"), rate=0.01).rate == 0.01
+
+
+def test_a_second_time_column_is_left_unread(tmp_path):
+    p = _csv(tmp_path, "time,timestamp_ns,gx\n0,5,1\n0.01,10000005,2\n0.02,20000005,3\n")
+    rec = load_record(p)
+    assert rec.names == ["gx"] and rec.rate == pytest.approx(100)
+    assert "column 'timestamp_ns' is another time column: the time is 'time'" in rec.notes[0]
