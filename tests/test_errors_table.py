@@ -261,6 +261,9 @@ FILE_BUILDERS = {
     "bursty host time without `--uniform`":
         ("bursty_csv", lambda tmp, write: ["fit", str(write()[0]), "--column", "gx", "--out",
                                            str(tmp / "m.json")]),
+    "outliers carrying over 1 % of a column's mean square":
+        ("spiky_csv", lambda tmp, write: ["fit", str(write(with_time=False)[0]), "--column", "a",
+                                          "--out", str(tmp / "m.json")]),
     "outliers dropped without a time column":
         ("spiky_csv", lambda tmp, write: ["fit", str(write(with_time=False)[0]), "--column", "a",
                                           "--outliers", "drop", "--out", str(tmp / "m.json")]),

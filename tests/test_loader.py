@@ -262,7 +262,7 @@ def _bounds(x):
 
 def test_outliers_are_reported_and_kept(spiky_csv):
     p, a, b = spiky_csv(with_time=False)
-    rec = load_record(p)
+    rec = load_record(p, outliers="keep")
     assert set(rec.outliers) == {"a", "b"}
     np.testing.assert_array_equal(rec.outliers["a"], [100, 700])
     np.testing.assert_array_equal(rec.outliers["b"], [700])
@@ -270,6 +270,43 @@ def test_outliers_are_reported_and_kept(spiky_csv):
     note = next(n for n in rec.notes if n.startswith("column 'a'"))
     assert "2 outlier(s) (|x - median| > 10 x 1.4826 MAD" in note
     assert "at sample(s) 100, 700 (line(s) 102, 702); kept" in note
+
+
+def test_outliers_that_carry_the_mean_square_refuse_the_record_by_default(spiky_csv):
+    p, _, _ = spiky_csv(with_time=False)
+    with pytest.raises(InputError, match=(
+            f"^{p}: column 'a': 2 outlier\\(s\\) \\(\\|x - median\\| > 10 x 1.4826 MAD\\) at "
+            r"sample\(s\) 100, 700 \(line\(s\) 102, 702\) carry 86 % of its mean square about "
+            "its median: .* --outliers keep \\(the sensor's\\), clip or drop$")):
+        load_record(p)
+
+
+@pytest.mark.parametrize("mode", ["refuse", "keep", "drop"])
+def test_a_single_spike_of_a_thousand_sigma(tmp_path, mode):
+    x = np.random.default_rng(8).normal(size=20_000)
+    x[12_345] = 1e3
+    p = _write(tmp_path, {"time": np.arange(x.size) / 100, "gx": x})
+    if mode == "refuse":  # 1e6 against a mean square of 2e4: 98 % of it
+        with pytest.raises(InputError, match=r"column 'gx': 1 outlier\(s\) .* carry 98 %"):
+            load_record(p)
+        return
+    rec = load_record(p, outliers=mode)
+    assert rec.outliers["gx"].tolist() == [12_345]
+    kept = rec.column("gx")
+    if mode == "keep":
+        np.testing.assert_array_equal(kept, x)
+    else:
+        np.testing.assert_array_equal(kept, np.delete(x, 12_345))
+
+
+def test_a_few_outliers_under_the_share_are_kept_with_a_note(tmp_path):
+    x = np.random.default_rng(9).normal(size=100_000)
+    x[500] = 12.0  # 144 against a mean square of 1e5: 0.14 %
+    rec = load_record(_write(tmp_path, {"gx": x}), rate=100)
+    np.testing.assert_array_equal(rec.column("gx"), x)
+    assert rec.outliers["gx"].tolist() == [500]
+    assert any("kept: they carry 0.14 % of its mean square about its median, under the 1 %"
+               in n for n in rec.notes)
 
 
 def test_outliers_clipped_to_the_bound(spiky_csv):
@@ -303,7 +340,7 @@ def test_dropping_without_time_is_refused(tmp_path, spiky_csv):
         load_record(p, outliers="drop")
     clean = load_record(_csv(tmp_path, "a\n0.5\n1.5\n0.7\n"), outliers="drop")
     assert clean.notes == ["--outliers drop: no outliers found (|x - median| > 10 x 1.4826 MAD)"]
-    with pytest.raises(InputError, match="outliers must be one of keep, clip, drop"):
+    with pytest.raises(InputError, match="outliers must be one of refuse, keep, clip, drop"):
         load_record(p, outliers="remove")
 
 
@@ -313,7 +350,7 @@ def test_outliers_of_a_column_on_few_levels(tmp_path):
     rec = load_record(_write(tmp_path, {"temp": temp, "const": np.ones(200)}))
     assert rec.outliers == {}
     temp[50] = 27.0
-    rec = load_record(_write(tmp_path, {"temp": temp, "const": np.ones(200)}))
+    rec = load_record(_write(tmp_path, {"temp": temp, "const": np.ones(200)}), outliers="keep")
     assert set(rec.outliers) == {"temp"} and rec.outliers["temp"].tolist() == [50]
 
 

@@ -50,7 +50,7 @@ from ..core.exceptions import InputError
 from ..core.validation import did_you_mean
 from .csv_reader import Preamble, preamble_rate
 from .formats import table_format
-from .outliers import OUTLIER_MODES, find_outliers, handle_outliers
+from .outliers import DEFAULT_OUTLIERS, OUTLIER_MODES, find_outliers, handle_outliers
 from .record import Record
 from .sensor_log import SensorLog
 from .time_units import time_unit
@@ -84,7 +84,7 @@ def load_record(
     rate: float | None = None,
     scale: Mapping[str, float] | None = None,
     uniform: bool = False,
-    outliers: str = "keep",
+    outliers: str = DEFAULT_OUTLIERS,
     gaps: str = "refuse",
     topic: str | None = None,
     temperature_topic: str | None = None,
@@ -117,11 +117,13 @@ def load_record(
         rate (N - 1 intervals over its span), as a host's bursty receive time
         needs; the time gap check is then skipped and ``Record.time`` becomes
         sample number / rate.
-    outliers : {"keep", "clip", "drop"}, default "keep"
+    outliers : {"refuse", "keep", "clip", "drop"}, default "refuse"
         What to do with samples farther than ``OUTLIER_K`` robust standard
-        deviations (1.4826 MAD) from their column's median: report them only,
-        clip them to that bound, or drop their rows (only from a record with a
-        time column).  They are reported in ``Record.notes`` and ``Record.outliers``.
+        deviations (1.4826 MAD) from their column's median: refuse the record when a
+        column's carry more than ``OUTLIER_SHARE`` (1 %) of its mean square about its
+        median and keep them otherwise (:mod:`fosmodel.io.outliers` says why), report
+        them only, clip them to that bound, or drop their rows (only from a record with
+        a time column).  They are reported in ``Record.notes`` and ``Record.outliers``.
     gaps : {"refuse", "contiguous", "fill", "segments"}, default "refuse"
         What to do with gaps in a regular time column (intervals over 1.5 times
         the median one): refuse the record, fill them by linear interpolation
