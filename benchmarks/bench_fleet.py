@@ -100,7 +100,7 @@ def figure(tasks: list[float], measured: dict[int, float], here: float, out: Pat
     import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
 
-    from fosmodel.io.output import plain_log_ticks
+    from fosmodel.io.figures import tidy
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(9.5, 3.8), layout="constrained")
     left.hist(tasks, bins=min(20, len(tasks)), color="C0")
@@ -122,7 +122,7 @@ def figure(tasks: list[float], measured: dict[int, float], here: float, out: Pat
                     fontsize="medium")
     right.legend(fontsize="small")
     right.grid(True, which="both", alpha=0.3)
-    plain_log_ticks(fig)
+    tidy(fig)
     fig.savefig(out, dpi=110)
 
 

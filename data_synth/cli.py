@@ -12,8 +12,6 @@ import argparse
 import json
 from collections.abc import Sequence
 
-from data_synth.io import write_record, write_sessions
-from data_synth.scenarios import SCENARIOS, make_sessions
 from fosmodel.core.exceptions import InputError
 
 
@@ -48,6 +46,10 @@ def run(args: argparse.Namespace) -> int:
     fosmodel.core.exceptions.InputError
         Unknown scenario or parameter, missing ``--out``, unusable values.
     """
+    # here: the parser is built for every fosmodel command, the generator only for this one
+    from data_synth.io import write_record, write_sessions
+    from data_synth.scenarios import SCENARIOS, make_sessions
+
     if args.list:
         width = max(map(len, SCENARIOS))
         for name, sc in SCENARIOS.items():

@@ -47,6 +47,53 @@ def narx() -> Callable[..., tuple[np.ndarray, float]]:
     return _simulate_narx
 
 
+#: A readable header: spaces, parentheses and a slash in every name, the units in brackets.
+READABLE = {"gx_dps": "Gyro X (deg/s)", "gy_dps": "Gyro Y (deg/s)", "gz_dps": "Gyro Z (deg/s)",
+            "ax_mps2": "Accel X (g)", "ay_mps2": "Accel Y (g)", "az_mps2": "Accel Z (g)"}
+
+
+@pytest.fixture(scope="session")
+def readable_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Six axes (the static_imu scenario, 300 s at 100 Hz) under a header such as
+    ``Gyro X (deg/s),...,Accel X (g)``, without a time column (``--rate 100``).
+
+    Accel X follows Accel Y two samples late, so that the residual loop of Accel X offers
+    Accel Y as an input, its lags and its square (terms named by the channel).
+    """
+    from data_synth import make_scenario
+
+    rec = make_scenario("static_imu", duration=300.0, seed=5)
+    frame = pd.DataFrame({READABLE[k]: v / 9.80665 if k.startswith("a") else v
+                          for k, v in rec.columns.items()})
+    ay = frame["Accel Y (g)"].to_numpy()
+    frame["Accel X (g)"] += 0.5 * np.r_[0.0, 0.0, ay[:-2]]
+    path = tmp_path_factory.mktemp("readable") / "readable.csv"
+    frame.to_csv(path, index=False)
+    return path
+
+
+@pytest.fixture
+def figure_log(tmp_path: Path,
+               monkeypatch: pytest.MonkeyPatch) -> Callable[[], Callable[[], dict[str, str]]]:
+    """Check every figure written from here on (also in worker processes).
+
+    ``log = figure_log()`` sets ``FOSMODEL_FIGURE_LOG`` (:mod:`fosmodel.io.figures`);
+    ``log()`` then maps each figure written, the end of its path, to what a reader could not
+    read in it (empty: nothing).
+    """
+    def start() -> Callable[[], dict[str, str]]:
+        path = tmp_path / "figures.log"
+        monkeypatch.setenv("FOSMODEL_FIGURE_LOG", str(path))
+
+        def read() -> dict[str, str]:
+            lines = path.read_text().splitlines() if path.exists() else []
+            return dict(line.split("\t", 1) for line in lines)
+
+        return read
+
+    return start
+
+
 @pytest.fixture
 def bursty_csv(tmp_path: Path) -> Callable[..., tuple[Path, float]]:
     """A writer of ``bursty.csv`` in the test's ``tmp_path``: 100 Hz samples received by a host

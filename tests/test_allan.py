@@ -172,6 +172,7 @@ def test_white_noise_slope_and_classic_readoff(seed):
     assert lo <= density <= hi
 
 
+@pytest.mark.slow
 def test_standard_errors_are_calibrated():
     """Over 40 white-noise records the z-scores of N^2 have unit spread.
 
@@ -209,6 +210,7 @@ def test_rate_random_walk_recovered(seed):
     assert result.alpha[0] == 0 and result.alpha[-1] == -2
 
 
+@pytest.mark.slow
 def test_seed_004_gyro_arw_and_rrw_recovered():
     """Seed 004 eq. 5.4: ARW 0.068 deg/sqrt(s), RRW 0.00029 deg/sqrt(s^3) at 102.4 Hz.
 
@@ -455,3 +457,15 @@ def test_step_record_with_undefined_noise_id_still_gives_adev_and_fit():
     result = allan_deviation(y, 100.0)
     assert np.isfinite(result.adev).all() and np.isfinite(result.lower).all()
     assert fit_noise(result).coefficients["K"] > 0  # a step looks like a rate random walk
+
+
+def test_cli_reads_the_units_in_a_column_s_name(tmp_path, capsys):
+    """``allan --column "Accel X (g)"``: the units from the name, as every command reads them."""
+    rng = np.random.default_rng(4)
+    path = tmp_path / "a.csv"
+    pd.DataFrame({"Accel X (g)": rng.normal(0.0, 1e-3, 20_000)}).to_csv(path, index=False)
+    assert cli.main(["allan", str(path), "--column", "Accel X (g)", "--rate", "100", "--out",
+                     str(tmp_path / "allan")]) == 0
+    out = capsys.readouterr().out
+    assert "Units:                              g" in out
+    assert "Sensor:                         accel" in out

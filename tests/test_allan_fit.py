@@ -29,6 +29,7 @@ def _nbk(seed: int, hours: float = 6.0) -> np.ndarray:
     return rec.columns[rec.target]
 
 
+@pytest.mark.slow
 def test_n_b_k_recovered_and_their_intervals_cover_over_seeds():
     """Over 20 seeds each 68 % interval holds the truth in about 68 % of them (standard error
     0.10: 0.45-0.95 is a wide band that a 3x too narrow or a useless interval fails), and
@@ -128,6 +129,7 @@ def test_a_bounded_bias_that_the_terms_cannot_follow_is_reported(tmp_path, capsy
 
 
 @pytest.mark.skipif(not ADIS.exists(), reason="../shared/data/adis16405 is not here")
+@pytest.mark.slow
 def test_the_fit_follows_the_adis16405_sessions():
     """All six axes of the six sessions: the fitted curve within 0.7-1.4x of the measured
     deviation over 0.1-1000 s, and B within 1.5x of min(ADEV)/0.664, on all but the four

@@ -118,6 +118,7 @@ def _still_array(seed, corr_w, rrw, duration=60.0, rate=102.4):
     return np.column_stack([rec.columns[n] for n in NAMES])
 
 
+@pytest.mark.slow
 def test_monte_carlo_drift_agrees_with_the_closed_forms():
     rate, runs = 102.4, 400
     rrw = 30 * np.array(ARRAY_RRW)  # 30x seed 004's RRW: the bias walks matter within 60 s

@@ -111,7 +111,9 @@ def test_existing_output_survives_a_failed_run(record, tmp_path, capsys):
     assert code == 2 and model.read_text() == "previous"
 
 
-def test_demo_writes_outputs_and_says_where(tmp_path, capsys):  # the main job, end to end
+@pytest.mark.slow
+def test_demo_writes_outputs_and_says_where(tmp_path, capsys, figure_log):  # the main job
+    figures = figure_log()
     code, out, err = _run(["demo", "--out", tmp_path / "demo"], capsys)
     assert code == 0, err
     assert f"outputs written to {(tmp_path / 'demo').resolve()}" in out
@@ -132,8 +134,14 @@ def test_demo_writes_outputs_and_says_where(tmp_path, capsys):  # the main job, 
     assert (mpu / "study_ay" / "order_fair.png").exists()
     for axis in ("ax", "ay", "az", "gx", "gy", "gz"):
         assert (mpu / f"loop_{axis}" / "report.md").exists()
+    # every figure reads (tests/test_figures.py says what is checked; the loop's are left out)
+    checked = figures()
+    assert len(checked) == len(list((tmp_path / "demo").rglob("*.png")))
+    assert {path: problems for path, problems in checked.items()
+            if problems and "/loop_" not in path} == {}
 
 
+@pytest.mark.slow
 def test_console_script_is_installed(record, tmp_path):
     script = shutil.which("fosmodel") or str(Path(sysconfig.get_path("scripts")) / "fosmodel")
     proc = subprocess.run([script, "fit", str(record), "--column", "nope",
@@ -151,6 +159,7 @@ def long_record(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_study_writes_report_and_json(long_record, tmp_path, capsys):
     out, js = tmp_path / "study", tmp_path / "rows.json"
     code, stdout, err = _run(["study", long_record, "--column", "accel_y", "--sensor", "accel",
@@ -202,6 +211,7 @@ def test_study_empty_file_exit_2(tmp_path, capsys):
     assert code == 2 and "the file is empty" in err
 
 
+@pytest.mark.slow
 def test_close_loop_finds_an_undeclared_temperature_effect(tmp_path, capsys):
     rec = tmp_path / "rec.csv"
     assert cli.main(["synth", "undeclared_temperature", "--seed", "0", "--out", str(rec)]) == 0
@@ -345,6 +355,7 @@ def _multi_study(paths, out, *extra):
             "--starts", "5", "--out", out, *extra]
 
 
+@pytest.mark.slow
 def test_study_of_many_files_and_columns(tmp_path, capsys):
     out, js = tmp_path / "out", tmp_path / "rows.json"
     code, stdout, err = _run(_multi_study(_imu_files(tmp_path), out, "--json", js), capsys)
@@ -487,7 +498,7 @@ def test_verbose_after_the_command_shows_the_traceback_of_a_bug(record, tmp_path
     def broken(*args, **kwargs):
         raise RuntimeError("a bug")
 
-    monkeypatch.setattr("fosmodel.cli.commands.read_model", broken)
+    monkeypatch.setattr("fosmodel.io.model_file.read_model", broken)  # predict imports it
     argv = ["predict", record, "--model", tmp_path / "m.json", "--out", tmp_path / "p.csv"]
     code, _, err = _run([*argv, "-v"], capsys)
     assert code == 1 and "Traceback" in err and "RuntimeError: a bug" in err
@@ -607,6 +618,7 @@ def test_a_single_units_and_sensor_still_apply_to_every_column(tmp_path, capsys)
             for r in json.loads(js.read_text())["records"]] == [("gyro", "deg/h")] * 2
 
 
+@pytest.mark.slow
 def test_study_split_in_percent_is_the_split_in_seconds(long_record, tmp_path, capsys):
     rows = []
     for split in ("50%,25%", "450s,225s", "7.5min,3.75min"):
@@ -632,6 +644,7 @@ def test_close_loop_split_in_seconds_resolves_to_fractions_of_the_record(record,
                           "short for the split 0.666667 / 0.166667: ")
 
 
+@pytest.mark.slow
 def test_allan_takes_units_per_column_beside_the_names(tmp_path, capsys):
     path = _mixed_imu(tmp_path)
     out, js = tmp_path / "noise", tmp_path / "noise.json"
@@ -649,3 +662,37 @@ def test_allan_takes_units_per_column_beside_the_names(tmp_path, capsys):
                               tmp_path / "one"], capsys)
     assert code == 0, err
     assert "Sensor:" in stdout and "accel" in stdout
+
+
+def test_close_loop_reads_the_units_in_a_column_s_name(tmp_path, capsys):
+    rng = np.random.default_rng(2)
+    path = tmp_path / "gz.csv"
+    gz = lfilter([1.0], [1.0, -0.9], rng.standard_normal(20_000)) * 0.01 + 0.3
+    pd.DataFrame({"gz_dps": gz}).to_csv(path, index=False)
+    code, out, err = _run(["close-loop", path, "--column", "gz_dps", "--rate", "100", "--out",
+                           tmp_path / "loop"], capsys)
+    assert code == 0, err
+    lines = out.splitlines()
+    assert lines[0] == ("prediction segment: MSE (deg/s)^2, outage position error (m, 30 s), "
+                        "bias RMS (deg/s)")
+    assert lines[2].split()[-2] != "-"  # the outage error of the starting model, in metres
+
+
+@pytest.mark.slow
+def test_close_loop_on_a_readable_header_takes_any_channel_as_input(readable_csv, tmp_path,
+                                                                   capsys):
+    """A channel ``Accel Y (g)`` enters the model with its lags and its square; the saved
+    model is applied again, its inputs read from the record by their headers."""
+    model = tmp_path / "final.json"
+    code, out, err = _run(["close-loop", readable_csv, "--column", "Accel X (g)", "--rate",
+                           "100", "--out", tmp_path / "loop", "--model", model], capsys)
+    assert code == 0, err
+    assert out.startswith("prediction segment: MSE (g)^2, outage position error (m, 30 s), "
+                          "bias RMS (g)\n")
+    assert "aux Accel Y (g) (lags 0-10 and its square)" in err
+    fitted = FOSModel.from_dict(json.loads(model.read_text()))
+    code, out, err = _run(["predict", readable_csv, "--model", model, "--rate", "100", "--out",
+                           tmp_path / "pred.csv"], capsys)
+    assert code == 0, err
+    assert "Accel Y (g)" in fitted.input_columns() and out.startswith(
+        "one-step prediction of 'Accel X (g)' on ")

@@ -34,8 +34,10 @@ def _run(args, capsys):
     return code, out, err
 
 
-def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys):
+@pytest.mark.slow
+def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys, figure_log):
     path, rec = imu_csv
+    figures = figure_log()
     out, js = tmp_path / "report", tmp_path / "imu.json"
     code, stdout, err = _run(["imu", path, "--columns", "gx_dps,ax_mps2", "--split", "60s,60s",
                               *FAST, "--out", out, "--json", js], capsys)
@@ -61,8 +63,14 @@ def test_two_axes_end_to_end_equal_the_library(imu_csv, tmp_path, capsys):
     for column in ("gx_dps", "ax_mps2"):
         assert (out / "models" / f"{column}.json").is_file()
         assert (out / "study" / column / "report.md").is_file()
+    # every figure of the report reads (tests/test_figures.py), the loop's left out
+    checked = figures()
+    assert len(checked) == len(list(out.rglob("*.png")))
+    assert {p: problems for p, problems in checked.items()
+            if problems and "/loop/" not in f"/{p}"} == {}
 
 
+@pytest.mark.slow
 def test_a_ros2_bag_is_read_with_its_units(imu_bag, tmp_path, capsys):
     bag, _ = imu_bag("day", "mcap", imu={"/imu0": 12_000}, rate=50.0)  # 240 s
     out = tmp_path / "bag-report"
@@ -81,9 +89,12 @@ def test_refusals_take_one_line_and_write_nothing(imu_csv, tmp_path, capsys):
     code, _, err = _run(["imu", path, *FAST, "--out", out], capsys)
     assert code == 2 and not out.exists()
     assert err.strip().splitlines()[-1] == (
-        "fosmodel: error: the record has 30000 samples (300 s at 100 Hz); the split 180 s / "
-        "180 s leaves 0 samples to predict, 6000 are needed (a 30 s outage horizon and two "
-        "30 s bias windows)")
+        "fosmodel: error: the record has 30000 samples (300 s at 100 Hz), too short for these "
+        "settings, which need at least 420 s: the study needs 420 s (the split 180 s / 180 s "
+        "leaves 0 samples to predict, 6000 are needed (a 30 s outage horizon and two 30 s bias "
+        "windows)); the loop needs 420 s (on the study's segments, which the record does not "
+        "hold); shorten --split (the loop's: --loop-split) or --horizon, or give a longer "
+        "record")
     other = tmp_path / "other.csv"
     pd.DataFrame({"time": np.arange(100) / 10, "foo": np.ones(100), "bar": np.zeros(100)}
                  ).to_csv(other, index=False)
@@ -103,6 +114,33 @@ def test_the_help_lists_the_options_with_their_defaults(capsys):
         main(["imu", "--help"])
     text = " ".join(capsys.readouterr().out.split())  # as one line, however argparse wraps
     for option, default in (("--orders", "1-10"), ("--protocol", "fair"),
-                            ("--split", "180s,180s"), ("--loop-split", "50%,20%"),
-                            ("--jobs", "2")):
+                            ("--split", "180s,180s"), ("--jobs", "2")):
         assert option in text and f"(default: {default})" in text, option
+    assert "--loop-split" in text and "(default: the study's, so that both score on one " \
+        "prediction segment)" in text
+
+
+@pytest.mark.slow
+def test_a_readable_header_goes_through_every_step(readable_csv, tmp_path, capsys):
+    """``Gyro X (deg/s),...,Accel X (g)``: units from the names, a loop that takes another
+    axis as its input, reports in folders named after the columns, models that apply again."""
+    from fosmodel.io.model_file import read_model
+    from fosmodel.io.output import path_name
+
+    out = tmp_path / "report"
+    axes = ["Accel X (g)", "Accel Y (g)", "Gyro Z (deg/s)"]  # a slash, brackets, spaces
+    code, _, err = _run(["imu", readable_csv, "--columns", ",".join(axes), "--rate", "100",
+                         "--split", "60s,60s", "--orders", "1", "--degrees", "1", "--methods",
+                         "fos,burg", "--jobs", "2", "--out", out], capsys)
+    assert code == 0, err
+    frame = pd.read_csv(readable_csv)
+    assert "fosmodel: Accel X (g): accel in g (from the name)" in err
+    assert "fosmodel: Gyro Z (deg/s): gyro in deg/s (from the name)" in err
+    assert list(pd.read_csv(out / "study.csv")["axis"]) == axes
+    assert "aux Accel Y (g) (lags 0-" in (out / "loop" / "Accel_X_g_" / "report.md").read_text()
+    for column in axes:
+        assert (out / "study" / path_name(column) / "report.md").is_file()
+        model = read_model(out / "models" / f"{path_name(column)}.json")
+        channels = {name: frame[name].to_numpy() for name in model.input_columns()}
+        pred = model.predict(frame[column].to_numpy(), channels)
+        assert np.isfinite(pred[model.lag_window_:]).all()

@@ -30,6 +30,7 @@ def _found(res, true):
 @pytest.mark.parametrize("name", [
     "undeclared_temperature", "undeclared_vibration", "undeclared_nonlinear",
     "undeclared_drift", "undeclared_aux_lag", "undeclared_step"])
+@pytest.mark.slow
 def test_loop_finds_the_effect_and_recovers_half_of_what_the_truth_gives(name, seed):
     rec, y, channels, config, res = _run(name, seed)
     ((true, slow),) = true_effects(rec.truth)
@@ -50,6 +51,7 @@ def test_loop_finds_the_effect_and_recovers_half_of_what_the_truth_gives(name, s
 
 
 @pytest.mark.parametrize("name", ["clean", "unrelated_temperature"])
+@pytest.mark.slow
 def test_controls_add_nothing_and_never_worsen(name):
     added = 0
     for seed in range(20):
@@ -174,6 +176,7 @@ def test_too_short_a_record_is_refused():
         close_loop(rec.columns["gyro_x"], {}, LoopConfig(rate=rec.rate))
 
 
+@pytest.mark.slow
 def test_a_rejected_candidate_keeps_no_columns_into_the_next_diagnosis(monkeypatch):
     # memory of long records: at each diagnosis the only effect columns alive are the model's
     import gc

@@ -36,6 +36,7 @@ def _without_runtime(result):
     return result.rows.drop(columns="runtime_s")
 
 
+@pytest.mark.slow
 def test_cluster_gives_the_in_process_table(client):
     growing = 1e-3 * 1.0005 ** np.arange(9000) + 1e-3 * _record(2)  # unstable fits, notes
     plans = [plan_study(_record(1), CONFIG), plan_study(growing, CONFIG)]
@@ -167,6 +168,7 @@ def tables_here(two_files, tmp_path_factory):
 
 
 @pytest.mark.parametrize("how", ["--workers", "--scheduler"])
+@pytest.mark.slow
 def test_cli_on_a_cluster_writes_the_in_process_tables(two_files, tables_here, tmp_path, client,
                                                        capsys, how):
     there = ["--workers", "2"] if how == "--workers" else ["--scheduler", client.scheduler.address]

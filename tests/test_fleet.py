@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import shutil
 
@@ -14,6 +15,7 @@ from fosmodel.core.exceptions import InputError
 from fosmodel.io.loader import load_record
 from fosmodel.io.split import SplitSpec
 from fosmodel.noise.axes import resolve_axes
+from fosmodel.study.harness import METHODS
 from fosmodel.workflows.fleet import MARKER, FleetConfig, record_name, run_fleet
 from fosmodel.workflows.imu import STEPS, ImuConfig, run_imu
 
@@ -71,6 +73,7 @@ def test_the_rows_are_the_six_axis_workflow_on_the_record(here, files):
             assert list(rows[column]) == list(table[column]), column
 
 
+@pytest.mark.slow
 def test_two_dask_workers_give_the_same_summary(here, files, tmp_path):
     from fosmodel.study.distributed import local_client
 
@@ -172,13 +175,18 @@ def test_a_split_too_long_for_a_record_is_refused_by_name(files, tmp_path):
     config = FleetConfig(imu=SMALL, split=SplitSpec.parse("150s,60s"))
     with pytest.raises(InputError) as error:
         run_fleet(files[:1], tmp_path, config)
-    assert str(error.value) == (
-        "record imu0: the record has 24000 samples (240 s at 100 Hz); the split 150 s / 60 s "
+    message = str(error.value)
+    assert message.startswith(
+        "record imu0: the record has 24000 samples (240 s at 100 Hz), too short for these "
+        "settings, which need at least 270 s: the study needs 270 s (the split 150 s / 60 s "
         "leaves 3000 samples to predict, 6000 are needed (a 30 s outage horizon and two 30 s "
-        "bias windows) (1 of 1 records failed)")
+        "bias windows)); the loop needs 270 s (")
+    assert message.endswith("shorten --split (the loop's: --loop-split) or --horizon, or give "
+                            "a longer record (1 of 1 records failed)")
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_the_full_report_of_a_record_has_every_axis_timed(files, tmp_path):
     result = run_fleet(files[:1], tmp_path, FleetConfig(imu=SMALL, split=CONFIG.split,
                                                         columns=("gx_dps", "ax_mps2"),
@@ -193,6 +201,7 @@ def test_the_full_report_of_a_record_has_every_axis_timed(files, tmp_path):
     assert list(result.table["axis"]) == ["gx_dps", "ax_mps2"]
 
 
+@pytest.mark.slow
 def test_the_command_on_a_running_scheduler_gives_the_in_process_summary(files, tmp_path):
     from distributed import get_task_stream
 
@@ -207,3 +216,27 @@ def test_the_command_on_a_running_scheduler_gives_the_in_process_summary(files, 
     assert len(tasks.data) == len(files)  # a task per record, run there
     pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "there" / "fleet.csv"),
                                   pd.read_csv(tmp_path / "here" / "fleet.csv"))
+
+
+SUBSETS = [s for k in range(1, len(METHODS) + 1) for s in itertools.combinations(METHODS, k)]
+
+
+@pytest.mark.parametrize("methods", SUBSETS, ids=",".join)
+def test_the_study_step_takes_every_subset_of_methods(methods, files, tmp_path, capsys):
+    store = tmp_path / "store"
+    assert cli.main(["fleet", str(files[0]), "--columns", "gx_dps,ax_mps2", "--orders", "1",
+                     "--degrees", "1", "--methods", ",".join(methods), "--steps", "study",
+                     "--split", "50%,25%", "--out", str(store)]) == 0, capsys.readouterr().err
+    table = pd.read_csv(store / "fleet.csv", keep_default_na=False, na_values=[""])
+    assert list(table["axis"]) == ["gx_dps", "ax_mps2"]
+    assert (table["FOS"] == "not studied").all() != ("fos" in methods)
+    assert (table["best baseline"] == "not studied").all() != bool(set(methods) - {"fos"})
+    assert table["FOS / baseline (outage)"].notna().all() == (
+        "fos" in methods and len(methods) > 1)
+
+
+def test_a_refused_fleet_leaves_no_store_behind(files, tmp_path):
+    config = FleetConfig(imu=SMALL, split=SplitSpec.parse("150s,60s"))
+    with pytest.raises(InputError, match="^record imu0: the record has 24000 samples"):
+        run_fleet(files[:1], tmp_path / "store", config)
+    assert list(tmp_path.iterdir()) == []

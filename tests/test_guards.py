@@ -119,6 +119,7 @@ sys.exit(code)
 """
 
 
+@pytest.mark.slow
 def test_a_file_that_expands_far_is_refused_within_a_memory_cap(tmp_path):
     """300 MB of one line in a 300 kB file: refused after 64 MB, in well under 1 GB."""
     path = tmp_path / "bomb.csv.gz"
@@ -275,6 +276,7 @@ def test_an_interrupted_command_exits_130_and_writes_nothing(folder, capsys, mon
     assert not [p for p in folder.iterdir() if p.name.startswith(".")]
 
 
+@pytest.mark.slow
 def test_ctrl_c_on_a_running_loop(tmp_path):
     """The real signal: SIGINT while the loop runs, then the same command to its end."""
     rng = np.random.default_rng(5)

@@ -84,6 +84,7 @@ def test_axes_given_inferred_and_refused():
         resolve_axes(["gx:gyro:deg/sec"])
 
 
+@pytest.mark.slow
 def test_each_axis_recovers_its_white_noise_and_says_what_its_random_walk_is(noise):
     """N within its 95 % interval on every axis; K, where resolved, within its interval, and
     exported as the upper limit where not (recovery over seeds is tested in test_allan_fit)."""
@@ -177,6 +178,7 @@ def _run(args, capsys):
     return code, out, err
 
 
+@pytest.mark.slow
 def test_the_command_writes_one_report_for_all_axes(six_axes, noise, tmp_path, capsys):
     out, js = tmp_path / "report", tmp_path / "noise.json"
     code, stdout, err = _run(["allan", six_axes, "--rate", RATE, "--columns", ",".join(TRUTH),

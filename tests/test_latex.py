@@ -31,11 +31,14 @@ from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
 from fosmodel.study.files import ColumnStudy, write_reports
 from fosmodel.study.harness import StudyConfig, plan_study
 from fosmodel.study.runner import run_study
-from fosmodel.typeset.latex import latex_number, latex_table, latex_text, table_label
+from fosmodel.typeset.latex import latex_number, latex_text, table_label
+from fosmodel.typeset.tables import latex_table
 
 PDFLATEX = shutil.which("pdflatex")
-DOCUMENT = ("\\documentclass{article}\n\\usepackage{booktabs}\n\\begin{document}\n%s\n"
-            "\\end{document}\n")
+#: A plain article with the packages fosmodel's tables name in their first line.
+PREAMBLE = ("\\documentclass{article}\n\\usepackage{booktabs}\n\\usepackage{longtable}\n"
+            "\\usepackage{pdflscape}\n\\usepackage{graphicx}\n\\begin{document}\n")
+DOCUMENT = PREAMBLE + "%s\n\\end{document}\n"
 #: Characters that mean something to LaTeX in text mode.
 SPECIAL = set("&%$#_{}~^\\")
 #: A title with every special character and a unit, as a user may give it.
@@ -64,7 +67,10 @@ def _tokens(source: str):
 
 
 def structural_problems(source: str) -> list[str]:
-    """What would stop ``source`` from compiling, or break the table (empty when none)."""
+    """What would stop ``source`` from compiling, or break the table (empty when none).
+
+    Whole-line comments (the line naming the packages a table needs) are left out."""
+    source = re.sub(r"(?m)^%.*\n", "", source)
     problems, depth, envs, previous = [], 0, [], ""
     for token, in_math in _tokens(source):
         if token == "{":
@@ -95,19 +101,26 @@ def structural_problems(source: str) -> list[str]:
 
 def _table_problems(source: str) -> list[str]:
     problems = []
-    tables = re.findall(r"\\begin\{table\}.*?\\end\{table\}", source, re.DOTALL)
+    tables = re.findall(r"\\begin\{(table|longtable)\}(.*?)\\end\{\1\}", source, re.DOTALL)
     if not tables:
         problems.append("no table")
-    for table in tables:
+    for kind, table in tables:
         if not re.search(r"\\caption\{.+\}", table):
             problems.append("a table without a caption")
         if not re.search(r"\\label\{tab:fosmodel-[a-z0-9-]+\}", table):
             problems.append("a table without a tab:fosmodel- label")
-        spec, body = re.search(r"\\begin\{tabular\}\{([^}]*)\}(.*)\\end\{tabular\}", table,
-                               re.DOTALL).groups()
+        if kind == "table":
+            spec, body = re.search(r"\\begin\{tabular\}\{([^}]*)\}(.*)\\end\{tabular\}", table,
+                                   re.DOTALL).groups()
+            expected = ["toprule", "midrule", "bottomrule"]
+        else:  # heads on the first page and on the next ones, the bottom rule on the last
+            spec, body = re.match(r"\{([^}]*)\}\n\\caption\{.*?\}\\label\{[^}]*\}\\\\\n(.*)",
+                                  table, re.DOTALL).groups()
+            body = re.sub(r"\\(endfirsthead|endhead|endlastfoot)\n", "", body)
+            expected = ["toprule", "midrule", "toprule", "midrule", "bottomrule"]
         rules = re.findall(r"\\(toprule|midrule|bottomrule)", body)
-        if rules != ["toprule", "midrule", "bottomrule"]:
-            problems.append(f"rules {rules}, not top, mid and bottom")
+        if rules != expected:
+            problems.append(f"rules {rules}, not {expected}")
         columns = len(re.findall(r"[lrc]|p\{[^}]*\}", spec))
         for row in re.split(r"\\\\\s*\n", re.sub(r"\\(toprule|midrule|bottomrule)", "", body)):
             if row.strip():
@@ -272,12 +285,142 @@ def test_units_numbers_and_labels():
 def test_the_tables_have_booktabs_rules_a_caption_and_the_reports_label(tmp_path):
     (path,) = _special_table(tmp_path)
     text = path.read_text()
-    assert text.startswith("\\begin{table}[htbp]\n\\caption{Every special character: "
+    assert text.startswith("% a fosmodel table: \\usepackage{booktabs}\n"
+                           "\\begin{table}[htbp]\n\\centering\n"
+                           "\\caption{Every special character: "
                            "\\_ \\textasciicircum{} \\% \\& \\# \\$ \\{ \\} "
                            "\\textasciitilde{} \\textbackslash{}}\n"
                            "\\label{tab:fosmodel-gx-dps-1-m-s-2-5-x-back-slash-special}\n"
                            "\\begin{tabular}{rrll}\n\\toprule\n")
-    assert "gx\\_dps & N (deg/s/$\\sqrt{\\mathrm{Hz}}$) & text \\& more & mixed \\\\\n" in text
-    assert "$1\\times10^{-5}$ & 1 & a\\_b\\textasciicircum{}c & -- \\\\" in text
+    # the heads over the units, in a second row
+    assert ("gx\\_dps & N & text \\& more & mixed \\\\\n"
+            " & (deg/s/$\\sqrt{\\mathrm{Hz}}$) &  &  \\\\\n\\midrule\n") in text
+    # a column of numbers in one format: 1e-05 and -2.5 both with four significant digits
+    assert "$1.000\\times10^{-5}$ & 1 & a\\_b\\textasciicircum{}c & -- \\\\" in text
+    assert "$-2.500$ & $-2$ & 50 \\% of \\#1 & 0.25 \\\\" in text
     assert "-- & 300000 & \\{braces\\} \\textasciitilde{} \\$5 & y[n-1]$^{2}$ \\\\" in text
     assert "$\\infty$ & 4 & back\\textbackslash{}slash & yes \\\\\n\\bottomrule" in text
+
+# -- tables laid out for the page --------------------------------------------------------------
+
+
+def test_a_column_of_numbers_has_one_format_that_tells_its_values_apart():
+    from fosmodel.typeset.tables import number_format
+
+    def column(values, digits=4):
+        fmt = number_format(values, digits)
+        return [fmt(v).source for v in values]
+
+    assert column([0.11237, 0.11239, 0.1125]) == ["0.11237", "0.11239", "0.11250"]
+    assert column([15.05, 10.7, 17.6]) == ["15.05", "10.70", "17.60"]
+    assert column([1.0, 10.0, 300.0]) == ["1", "10", "300"]
+    assert column([4.2e-4, 0.035, 2.2e5, np.nan]) == [
+        r"$4.200\times10^{-4}$", r"$3.500\times10^{-2}$", r"$2.200\times10^{5}$", "--"]
+    assert column([-0.5, 0.25]) == ["$-0.5000$", "0.2500"]
+
+
+def test_a_head_is_its_name_over_its_units():
+    from fosmodel.typeset.tables import head_lines, split_head
+
+    assert split_head("Outage position error (m, 30 s)") == ("Outage position error",
+                                                             "(m, 30 s)")
+    assert split_head("MSE (deg/s)^2") == ("MSE", "(deg/s)^2")
+    assert split_head("N (deg/s/sqrt(Hz))") == ("N", "(deg/s/sqrt(Hz))")
+    assert split_head("Terms") == ("Terms", "")
+    assert head_lines("Outage position error", 40.0) == ["Outage", "position error"]
+    assert head_lines("MSE", 40.0) == ["MSE"]
+
+
+def _frame(rows: int, numbers: int, text: int = 2) -> pd.DataFrame:
+    rng = np.random.default_rng(rows + numbers)
+    columns = {f"Key {k}": [f"method {i % 7}" for i in range(rows)] for k in range(text)}
+    columns.update({f"Outage error {k} (m, 30 s)": rng.lognormal(0.0, 0.5, rows)
+                    for k in range(numbers)})
+    return pd.DataFrame(columns)
+
+
+@pytest.mark.parametrize(("rows", "numbers", "shape"), [
+    (10, 4, dict(landscape=False, long=False, parts=1)),
+    (10, 8, dict(landscape=True, long=False, parts=1)),
+    (10, 16, dict(landscape=True, long=False, parts=2)),
+    (120, 4, dict(landscape=False, long=True, parts=1)),
+    (120, 16, dict(landscape=True, long=True, parts=2)),
+])
+def test_a_table_is_set_the_first_way_that_fits_the_page(rows, numbers, shape, tmp_path):
+    """As it is; landscape; in parts repeating the text columns; a longtable when long."""
+    from fosmodel.typeset.tables import choose_layout, columns_of
+
+    frame = _frame(rows, numbers)
+    layout = choose_layout(columns_of(frame), len(frame))
+    assert (layout.landscape, layout.long, len(layout.parts)) == (
+        shape["landscape"], shape["long"], shape["parts"])
+    assert all(part[:2] == (0, 1) for part in layout.parts)  # the key columns in every part
+    source = latex_table(frame, "A table of outages", table_label("t", str(rows)))
+    assert source.count("\\begin{landscape}") == (len(layout.parts) if layout.landscape else 0)
+    assert source.count("\\begin{longtable}") == (len(layout.parts) if layout.long else 0)
+    assert structural_problems(source) == []
+    if PDFLATEX:
+        assert _page_problems({"t.tex": source}, tmp_path) == {}
+
+
+def _page_problems(sources: dict[str, str], workdir: Path) -> dict[str, list[str]]:
+    """Compile the tables in one plain article (twice: longtable settles its widths) and say,
+    per table, what does not fit a page: an overfull line over 10 pt, a float too large."""
+    body = ""
+    for name, source in sources.items():
+        (workdir / f"t{len(body)}.tex").write_text(source)
+        body += f"\\typeout{{FOSMODEL TABLE {name}}}\n\\input{{t{len(body)}.tex}}\n\\clearpage\n"
+    (workdir / "all.tex").write_text(PREAMBLE + body + "\\end{document}\n")
+    for _ in range(2):
+        run = subprocess.run([PDFLATEX, "-interaction=nonstopmode", "all.tex"], cwd=workdir,
+                             capture_output=True, text=True, timeout=600,
+                             stdin=subprocess.DEVNULL)
+    assert run.returncode == 0, run.stdout[-2000:]
+    found: dict[str, list[str]] = {}
+    table = None
+    for line in (workdir / "all.log").read_text(errors="replace").splitlines():
+        if line.startswith("FOSMODEL TABLE "):
+            table = line.removeprefix("FOSMODEL TABLE ")
+        overfull = re.search(r"Overfull \\hbox \(([0-9.]+)pt too wide\)", line)
+        if overfull and float(overfull[1]) > 10 or "Float too large for page" in line:
+            found.setdefault(str(table), []).append(line.strip())
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(PDFLATEX is None, reason="pdflatex is not installed (.ci/run installs it "
+                    "with apt-get where it runs as root)")
+def test_every_table_the_commands_write_on_a_10_minute_record_fits_a_page(tmp_path, capsys):
+    """``study``, ``allan --columns``, ``close-loop`` and ``imu`` on a 10-minute six-axis record:
+    each of their tables compiles in a plain article (booktabs, default margins) with no line
+    overfull by more than 10 pt and no float too large for its page."""
+    from fosmodel.cli import main
+
+    record = tmp_path / "rec.csv"
+    assert main(["synth", "static_imu", "--duration", "600", "--seed", "1", "--out",
+                 str(record)]) == 0
+    out = tmp_path / "out"
+    for args in (["study", "--column", "gx_dps"],
+                 ["allan", "--columns", "gx_dps,gy_dps,gz_dps,ax_mps2,ay_mps2,az_mps2"],
+                 ["close-loop", "--column", "gx_dps"], ["imu"]):
+        assert main([args[0], str(record), *args[1:], "--out", str(out / args[0])]) == 0
+    capsys.readouterr()
+    tables = sorted(out.rglob("*.tex"))
+    assert len(tables) >= 70  # 74 with the effects the loop keeps on this record
+    sources = {str(t.relative_to(out)): t.read_text() for t in tables}
+    assert {name: p for name, s in sources.items() if (p := structural_problems(s))} == {}
+    work = tmp_path / "tex"
+    work.mkdir()
+    assert _page_problems(sources, work) == {}
+
+
+@pytest.mark.skipif(PDFLATEX is None, reason="pdflatex is not installed")
+def test_the_page_check_finds_a_table_too_wide_and_a_float_too_long(tmp_path):
+    wide = ("\\begin{table}[htbp]\n\\begin{tabular}{" + "r" * 12 + "}\n"
+            + " & ".join(["1234567.89"] * 12) + " \\\\\n\\end{tabular}\n\\end{table}\n")
+    long = ("\\begin{table}[htbp]\n\\begin{tabular}{r}\n" + "1 \\\\\n" * 80
+            + "\\end{tabular}\n\\end{table}\n")
+    found = _page_problems({"wide": wide, "long": long}, tmp_path)
+    assert set(found) == {"wide", "long"}
+    assert "Overfull \\hbox" in found["wide"][0]
+    assert "Float too large for page" in found["long"][0]

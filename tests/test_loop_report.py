@@ -4,6 +4,7 @@ import re
 
 import numpy as np
 import pandas as pd
+import pytest
 from scipy.signal import lfilter
 
 from fosmodel import cli
@@ -77,6 +78,7 @@ def test_still_firing_names_the_channel_lag_frequency_or_product():
         "step at 58.26 s", "whiteness (lags 1-20)"]
 
 
+@pytest.mark.slow
 def test_the_close_loop_console_fits_100_columns_with_many_terms(tmp_path, capsys):
     """Five channels with long names, each explaining part of the residual at its own lag."""
     rng = np.random.default_rng(0)

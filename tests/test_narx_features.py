@@ -119,6 +119,7 @@ def test_a_pipeline_selects_what_fosmodel_selects():
     np.testing.assert_allclose(pipe.predict(rows), model.predict(y, {"x": x})[2:], rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_grid_search_over_time_series_splits_finds_the_true_lags_and_degree():
     y, x = _narx(2000, 0)
     rows, target = lagged_rows(y, {"x": x}, max_lag=4, exog_lags={"x": 2})

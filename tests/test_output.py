@@ -152,3 +152,12 @@ def test_killed_while_writing_leaves_the_old_or_the_new_file_whole(tmp_path):
         assert text == "old" or (len(text) == 200_000 and len(set(text)) == 1)
     write_text(path, "done")  # the next write clears what the killed ones left
     assert [p.name for p in tmp_path.iterdir()] == ["out.txt"]
+
+
+@pytest.mark.parametrize("name, file", [("gx_dps", "gx_dps"), ("Gyro X (deg/s)", "Gyro_X_deg_s_"),
+                                        ("acc.x [m/s^2]", "acc.x_m_s_2_"), ("..", "column"),
+                                        ("a/../b", "a_.._b")])
+def test_a_column_s_name_as_a_file_name_stays_in_its_folder(name, file):
+    from fosmodel.io.output import path_name
+
+    assert path_name(name) == file

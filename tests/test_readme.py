@@ -26,6 +26,7 @@ def _commands():
 
 
 @pytest.mark.parametrize(("page", "code"), _blocks("python"))
+@pytest.mark.slow
 def test_python_blocks_run(page, code, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     exec(compile(code, page, "exec"), {})
@@ -62,6 +63,7 @@ def test_the_readme_is_short_and_its_links_resolve():
 
 
 @pytest.mark.parametrize(("page", "block"), _commands())
+@pytest.mark.slow
 def test_command_line_blocks_run(page, block, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     for line in block.strip().splitlines():

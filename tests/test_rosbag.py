@@ -221,6 +221,7 @@ def test_without_the_ros_extra(imu_bag, monkeypatch):
         f"{path}: reading ROS bags needs the 'ros' extra: pip install 'fosmodel[ros]'")
 
 
+@pytest.mark.slow
 def test_the_command_line_on_a_bag(imu_bag, tmp_path, capsys):
     path, _ = imu_bag("imu", "mcap", imu={"/imu0": 4000, "/imu1": 100})
     model = tmp_path / "gx.json"

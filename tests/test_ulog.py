@@ -176,6 +176,7 @@ def test_without_the_px4_extra(tmp_path, monkeypatch):
 
 
 @needs_logs
+@pytest.mark.slow
 def test_the_command_line_on_a_log(tmp_path, capsys):
     out = tmp_path / "allan"
     argv = ["allan", str(SAMPLE), "--topic", "sensor_combined", "--columns", ",".join(COLUMNS),
@@ -190,3 +191,21 @@ def test_the_command_line_on_a_log(tmp_path, capsys):
     assert cli.main(["fit", str(SMALL), "--column", "gx", "--out", str(model)]) == 2
     assert capsys.readouterr().err.startswith(
         f"fosmodel: error: {SMALL}: 10 IMU topics, choose one with --topic: sensor_accel:0 ")
+
+
+@needs_logs
+@pytest.mark.parametrize("settings, least", [([], "420 s"), (["--split", "20%,20%", "--horizon",
+                                                               "5"], "100 s")])
+def test_a_log_too_short_for_the_workflow_is_told_its_least_length_at_once(settings, least,
+                                                                          tmp_path, capsys):
+    """One message with the least length these settings take and what to change, before any
+    work: not one more minimum per try."""
+    out = tmp_path / "never"
+    assert cli.main(["imu", str(SAMPLE), "--fill", *settings, "--out", str(out)]) == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert error.startswith("fosmodel: error: the record has 17221 samples (68.884 s at 250 Hz), "
+                            f"too short for these settings, which need at least {least}: the "
+                            f"study needs {least} (")
+    assert "; the loop needs " in error and error.endswith(
+        "shorten --split (the loop's: --loop-split) or --horizon, or give a longer record")
+    assert not out.exists()

@@ -1,7 +1,9 @@
 """One short function per command, each over public library functions.
 
 A command checks its outputs before it reads anything (no output may name an input),
-reads only the columns it uses, and writes every file atomically; its errors are
+reads only the columns it uses, imports only the modules it uses (the models, SciPy and
+scikit-learn inside the functions that need them), and writes every file atomically; its
+errors are
 :class:`~fosmodel.core.exceptions.InputError`, which :func:`fosmodel.cli.main` prints in
 one line with exit code 2.
 """
@@ -15,14 +17,8 @@ import sys
 import textwrap
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
-
-from ..core.candidates import count_candidates
 from ..core.exceptions import InputError
-from ..core.levels import levels_for
 from ..io.loader import Record, load_record, parse_scales
-from ..io.model_file import read_model, write_model
 from ..io.output import (
     atomic_write,
     refuse_overwrite,
@@ -31,8 +27,7 @@ from ..io.output import (
     writable_file,
     write_text,
 )
-from ..models.model import FOSModel
-from ..noise.axes import SENSORS, Axis, resolve_axes
+from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
@@ -55,17 +50,26 @@ def _axes(args: argparse.Namespace, columns: list[str], rec: Record,
           optional: bool = False) -> list[Axis]:
     """Resolve each column's sensor and units (:func:`~fosmodel.noise.axes.resolve_axes`).
 
-    From --units, the file, --sensor, --gyro-units/--accel-units or its name; none if
-    ``optional`` and none is given.
+    From --units, the file, --sensor, --gyro-units/--accel-units or its name (``gz_dps``,
+    ``Accel X (g)``), as every command reads them; none if ``optional`` and none is told.
     """
     per_sensor = {s: units for s in SENSORS if (units := vars(args).get(f"{s}_units"))}
-    if optional and not (args.sensor or args.units or per_sensor or set(columns) & set(rec.units)):
+    named = all(None not in infer_axis(c) for c in columns)
+    if optional and not (args.sensor or args.units or per_sensor or named
+                         or set(columns) & set(rec.units)):
         return []
     return resolve_axes(columns, per_sensor, given=args.units, declared=rec.units,
                         sensor=args.sensor)
 
 
 def fit(args: argparse.Namespace) -> int:
+    import pandas as pd
+
+    from ..core.candidates import count_candidates
+    from ..core.levels import levels_for
+    from ..io.model_file import write_model
+    from ..models.model import FOSModel
+
     out = writable_file(args.out)
     refuse_overwrite({"--out": out}, {"the record": args.file})
     exog_lags = dict(args.exog or [])
@@ -98,6 +102,11 @@ def fit(args: argparse.Namespace) -> int:
 
 
 def predict(args: argparse.Namespace) -> int:
+    import numpy as np
+    import pandas as pd
+
+    from ..io.model_file import read_model
+
     out = writable_file(args.out)
     refuse_overwrite({"--out": out}, {"the record": args.file, "the model": args.model})
     model = read_model(args.model)
@@ -185,6 +194,7 @@ def study(args: argparse.Namespace) -> int:
 
 
 def close_loop(args: argparse.Namespace) -> int:
+    from ..io.model_file import write_model
     from ..loop.closeloop import LoopConfig
     from ..loop.closeloop import close_loop as run_loop
     from ..loop.loop_report import CONSOLE_WIDTH, console_summary, write_loop_report

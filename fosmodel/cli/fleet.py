@@ -10,10 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..io.loader import parse_scales
-from ..io.output import writable_directory
 from .arguments import RECORD_HELP, name_list, positive_float, positive_int
-from .commands import _check_dask
 from .imu import add_workflow_options, workflow_settings
 
 #: The steps of :data:`fosmodel.workflows.imu.STEPS`, spelt here: importing the workflow
@@ -48,9 +45,12 @@ def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser
 
 def fleet(args: argparse.Namespace) -> int:
     """Run the fleet of ``args.files`` into the store ``args.out``; print what it did."""
+    from ..io.loader import parse_scales
+    from ..io.output import writable_directory
     from ..study.runner import dask_client
     from ..workflows.fleet import FleetConfig, run_fleet
     from ..workflows.imu import ImuConfig
+    from .commands import _check_dask
 
     _check_dask(args)
     out = writable_directory(args.out)

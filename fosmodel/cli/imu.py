@@ -12,16 +12,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..io.output import (
-    refuse_overwrite,
-    report_directory,
-    writable_directory,
-    writable_file,
-    write_text,
-)
 from ..io.split import SplitSpec
 from ..noise.axes import UnitsSpec
-from ..study.harness import METHODS
 from .arguments import (
     RECORD_HELP,
     SPLIT_HELP,
@@ -32,8 +24,11 @@ from .arguments import (
     positive_float,
     positive_int,
 )
-from .commands import _load
 from .parsing import parsed
+
+#: The methods of :data:`fosmodel.study.harness.METHODS`, spelt here: importing the harness
+#: would load every estimator whenever the parser is built (a test holds the two equal).
+METHODS = ("fos", "yw", "cov", "burg", "gm")
 
 
 def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -70,8 +65,10 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
                         help="the study's protocol (paper: baselines on denoised data)")
     parser.add_argument("--split", type=parsed(SplitSpec.parse), default="180s,180s",
                         metavar="TRAIN,EVALUATE", help="the study's segments: " + SPLIT_HELP)
-    parser.add_argument("--loop-split", type=parsed(SplitSpec.parse), default="50%,20%",
-                        metavar="TRAIN,EVALUATE", help="the loop's segments: " + SPLIT_HELP)
+    parser.add_argument("--loop-split", type=parsed(SplitSpec.parse), metavar="TRAIN,EVALUATE",
+                        help="the loop's segments, if not those of --split: " + SPLIT_HELP
+                        + " (default: the study's, so that both score on one prediction "
+                          "segment)")
     parser.add_argument("--horizon", type=positive_float, default="30",
                         help="outage horizon in seconds")
     parser.add_argument("--min-tau", type=positive_float,
@@ -88,8 +85,16 @@ def workflow_settings(args: argparse.Namespace) -> dict[str, Any]:
 
 def imu(args: argparse.Namespace) -> int:
     """Run the six-axis workflow on ``args.file`` and publish its report in ``args.out``."""
+    from ..io.output import (
+        refuse_overwrite,
+        report_directory,
+        writable_directory,
+        writable_file,
+        write_text,
+    )
     from ..workflows.imu import ImuConfig, record_axes, run_imu
     from ..workflows.imu_report import console_summary, write_imu_report
+    from .commands import _load
 
     json_path = writable_file(args.json) if args.json else None
     out = writable_directory(args.out)
@@ -99,10 +104,15 @@ def imu(args: argparse.Namespace) -> int:
     for axis in axes:
         print(f"fosmodel: {axis.describe()}", file=sys.stderr)
     rate = rec.require_rate()
-    train_s, evaluate_s = args.split.seconds(rec.n_samples, rate)
-    config = ImuConfig(**workflow_settings(args), train_s=train_s, evaluate_s=evaluate_s,
-                       loop_split=args.loop_split.fractions(rec.n_samples, rate),
-                       n_jobs=args.jobs)
+
+    def at(n: int) -> ImuConfig:  # the settings for a record of n samples
+        train_s, evaluate_s = args.split.seconds(n, rate)
+        return ImuConfig(**workflow_settings(args), train_s=train_s, evaluate_s=evaluate_s,
+                         loop_split=args.loop_split and args.loop_split.fractions(n, rate),
+                         n_jobs=args.jobs)
+
+    at(rec.n_samples).check(rec.n_samples, rate, axes, at=at)  # too short: one message
+    config = at(rec.n_samples)
     result = run_imu({a.column: rec.column(a.column) for a in axes}, axes, rate, rec.source,
                      aux=aux, config=config,
                      progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,

@@ -5,10 +5,8 @@ from __future__ import annotations
 import argparse
 
 from .._version import __version__
-from ..core.fos import STOP_RULES
 from ..io.split import SplitSpec
 from ..noise.axes import UnitsSpec
-from . import commands
 from .arguments import (
     RECORD_HELP,
     SPLIT_HELP,
@@ -21,7 +19,11 @@ from .arguments import (
     positive_float,
     positive_int,
 )
-from .parsing import CommandParser, parsed
+from .parsing import Command, CommandParser, parsed
+
+#: The stopping rules of :data:`fosmodel.core.fos.STOP_RULES`, spelt here: importing the
+#: search would load SciPy whenever the parser is built (a test holds the two equal).
+STOP_RULES = ("korenberg", "max_terms", "variance", "mean_square", "aic", "bic", "fpe", "mdl")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -51,7 +53,7 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--max-candidates", type=positive_int, default=100_000,
                      help="refuse a candidate set larger than this")
     fit.add_argument("--out", required=True, help="model file to write (JSON)")
-    fit.set_defaults(func=commands.fit)
+    fit.set_defaults(func=Command("commands", "fit"))
 
     pred = sub.add_parser("predict", help="one-step-ahead prediction with a saved model")
     pred.add_argument("file", help=RECORD_HELP)
@@ -59,7 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     pred.add_argument("--column", help="column to predict (default: the one the model was fit on)")
     add_loader_options(pred)
     pred.add_argument("--out", required=True, help="CSV to write")
-    pred.set_defaults(func=commands.predict)
+    pred.set_defaults(func=Command("commands", "predict"))
 
     study = sub.add_parser("study", help="model-order study: every method, order and degree")
     study.add_argument("files", nargs="+", metavar="FILE",
@@ -104,7 +106,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="run the fits on a local Dask cluster of N single-threaded processes")
     study.add_argument("--connect-timeout", type=positive_float, default="10", metavar="S",
                        help="seconds to wait for --scheduler")
-    study.set_defaults(func=commands.study)
+    study.set_defaults(func=Command("commands", "study"))
 
     loop = sub.add_parser("close-loop", help="find what the model lacks in its residual, "
                           "add it, report the error before and after")
@@ -115,7 +117,8 @@ def build_parser() -> argparse.ArgumentParser:
                       help="columns that may explain the residual (default: every other column)")
     loop.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS",
                       help="units of the column (deg/s, or gx=deg/s), which tell the sensor, "
-                           "for position errors (default: none, no position errors)")
+                           "for position errors (default: from the column's name, e.g. gz_dps; "
+                           "else none, no position errors)")
     loop.add_argument("--sensor", choices=("accel", "gyro"),
                       help="sensor of the column (the units tell it; checked against them)")
     loop.add_argument("--max-lag", type=int, default=10, help="L of the starting model")
@@ -126,7 +129,7 @@ def build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--json", help="also write the before/after metrics and effects as JSON")
     loop.add_argument("--model", help="also write the final model as JSON (as 'fosmodel fit' "
                                       "does), for 'fosmodel predict' and a filter")
-    loop.set_defaults(func=commands.close_loop)
+    loop.set_defaults(func=Command("commands", "close_loop"))
 
     allan = sub.add_parser("allan", help="Allan deviation with confidence intervals and the "
                            "IEEE Std 952 noise coefficients")
@@ -139,8 +142,9 @@ def build_parser() -> argparse.ArgumentParser:
                             "units come from the names (gx_dps, acc_y_mps2) where not given")
     add_loader_options(allan, contiguous="the Allan deviation")
     allan.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS,...",
-                       help=UNITS_HELP + "; for navigation units (default: --columns from "
-                                          "the names; --column in its own units)")
+                       help=UNITS_HELP + "; for navigation units (default: from the "
+                                          "names, e.g. gx_dps; a --column whose name tells "
+                                          "none in its own units)")
     allan.add_argument("--sensor", choices=("accel", "gyro"),
                        help="sensor of every column (the units tell it; checked against them)")
     allan.add_argument("--gyro-units", metavar="UNITS",
@@ -155,28 +159,26 @@ def build_parser() -> argparse.ArgumentParser:
     allan.add_argument("--title", help="title of the figure")
     allan.add_argument("--out", required=True, help="output directory (created)")
     allan.add_argument("--json", help="also write the Allan deviation and coefficients as JSON")
-    allan.set_defaults(func=commands.allan)
+    allan.set_defaults(func=Command("commands", "allan"))
 
-    from . import imu
+    from . import fleet, imu
 
     six = sub.add_parser("imu", help="every axis of an IMU record: Allan noise, model-order "
                          "study and residual loop, one report")
-    imu.configure_parser(six).set_defaults(func=imu.imu)
-
-    from . import fleet
+    imu.configure_parser(six).set_defaults(func=Command("imu", "imu"))
 
     many = sub.add_parser("fleet", help="a batch of IMU records through the six-axis workflow, "
                           "in this process or on Dask; a rerun resumes")
-    fleet.configure_parser(many).set_defaults(func=fleet.fleet)
+    fleet.configure_parser(many).set_defaults(func=Command("fleet", "fleet"))
 
     from data_synth.cli import configure_parser
 
     synth = sub.add_parser("synth", help="write a synthetic record with its ground truth")
-    configure_parser(synth).set_defaults(func=commands.synth)
+    configure_parser(synth).set_defaults(func=Command("commands", "synth"))
 
     demo = sub.add_parser("demo", help="the main job on embedded synthetic data")
     demo.add_argument("--out", default="fosmodel-out", help="output directory")
-    demo.set_defaults(func=commands.demo)
+    demo.set_defaults(func=Command("commands", "demo"))
     for command in sub.choices.values():  # -v after the command too; SUPPRESS keeps one before
         command.add_argument("-v", "--verbose", action="store_true", default=argparse.SUPPRESS,
                              help="log details and tracebacks")

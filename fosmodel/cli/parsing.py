@@ -7,12 +7,31 @@ with the reason, and argument types over the library's parsers.
 from __future__ import annotations
 
 import argparse
+import importlib
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any, NoReturn, TypeVar
 
 from ..core.exceptions import InputError
 
 T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Command:
+    """A command's function, named by its module of :mod:`fosmodel.cli` and imported when it runs.
+
+    The parser of every command is built at each start (``fosmodel --version`` too); importing
+    the commands' modules there would load pandas, SciPy and scikit-learn for nothing.
+    """
+
+    module: str
+    name: str
+
+    def __call__(self, args: argparse.Namespace) -> int:
+        """Run the command on the parsed ``args``; return its exit code."""
+        function = getattr(importlib.import_module(f"fosmodel.cli.{self.module}"), self.name)
+        return int(function(args))
 
 
 class CommandParser(argparse.ArgumentParser):

@@ -7,8 +7,6 @@ code 2.  Anything else reaching the command line is a bug (exit code 1).
 
 from __future__ import annotations
 
-from sklearn.exceptions import NotFittedError as _SklearnNotFitted
-
 
 class FOSModelError(Exception):
     """Base class of all fosmodel errors."""
@@ -22,13 +20,27 @@ class InputError(FOSModelError, ValueError):
     """
 
 
-class NotFittedError(InputError, _SklearnNotFitted):
-    """A model was used before ``fit()``.
+def __getattr__(name: str) -> type:
+    """Make :class:`NotFittedError` the first time it is asked for.
 
-    scikit-learn's ``NotFittedError`` (so ``FOSModel``, ``FOSRegressor`` and the baselines
-    all raise what scikit-learn users catch) and an :class:`InputError` (so the command line
-    reports it in one line).
+    It is also scikit-learn's ``NotFittedError``, and importing scikit-learn takes longer
+    than everything a command needs to start: the class waits until a model is used.
     """
+    if name != "NotFittedError":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from sklearn.exceptions import NotFittedError as SklearnNotFitted
+
+    class NotFittedError(InputError, SklearnNotFitted):
+        """A model was used before ``fit()``.
+
+        scikit-learn's ``NotFittedError`` (so ``FOSModel``, ``FOSRegressor`` and the
+        baselines all raise what scikit-learn users catch) and an :class:`InputError` (so
+        the command line reports it in one line).
+        """
+
+    NotFittedError.__module__, NotFittedError.__qualname__ = __name__, "NotFittedError"
+    globals()["NotFittedError"] = NotFittedError
+    return NotFittedError
 
 
 def error_line(exc: BaseException) -> str:

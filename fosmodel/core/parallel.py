@@ -9,7 +9,9 @@ here, :mod:`fosmodel.workflows.fleet`: a cluster, not one machine's processes.)
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
-from typing import Any
+from typing import Any, TypeVar
+
+Result = TypeVar("Result")
 
 
 def in_workers(calls: Iterable[tuple[Callable[..., Any], tuple]], n_jobs: int,
@@ -27,4 +29,20 @@ def in_workers(calls: Iterable[tuple[Callable[..., Any], tuple]], n_jobs: int,
     from joblib import Parallel, delayed
 
     run = Parallel(n_jobs=n_jobs, return_as="generator" if ordered else "generator_unordered")
-    yield from run(delayed(function)(*args) for function, args in calls)
+    yield from run(delayed(_in_kept_worker)(function, args) for function, args in calls)
+
+
+def _in_kept_worker(function: Callable[..., Result], args: tuple) -> Result:
+    """Call ``function(*args)`` in a worker that loky will not retire for its memory.
+
+    loky measures a worker's memory after its first call and retires the worker once it
+    holds 300 MB more; a worker whose first call was small and whose next one imports the
+    models and draws figures is retired so, and a worker retired while calls wait can leave
+    the caller waiting for ever (the executor loses the call).  What a worker holds here is
+    the libraries it imported, not a leak: the check is switched off in the worker, which
+    then only collects garbage between calls.
+    """
+    from joblib.externals.loky import process_executor
+
+    process_executor._USE_PSUTIL = False
+    return function(*args)

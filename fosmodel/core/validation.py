@@ -9,7 +9,7 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .exceptions import InputError, NotFittedError
+from .exceptions import InputError
 
 
 def did_you_mean(name: str, options: Iterable[str]) -> str:
@@ -21,6 +21,8 @@ def did_you_mean(name: str, options: Iterable[str]) -> str:
 def check_fitted(model: object, attribute: str) -> None:
     """Raise :class:`NotFittedError` unless ``model`` has the fitted ``attribute``."""
     if not hasattr(model, attribute):
+        from .exceptions import NotFittedError  # here: it imports scikit-learn
+
         raise NotFittedError(f"this {type(model).__name__} is not fitted yet; call fit() first")
 
 

@@ -16,15 +16,17 @@ import re
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-import pandas as pd
 
 from ..core.exceptions import InputError, error_line
 from .compression import HEAD_BYTES, MAX_LINE, capped_source, head, head_lines
 from .timebase import RATE_RANGE, RATE_TOLERANCE
 from .values import number_or_ratio
+
+if TYPE_CHECKING:  # pandas is imported where a record is read: not by the CLI's help
+    import pandas as pd  # here: loaded by the first record read, not by the parser
 
 _PREAMBLE_MAX_LINES = 50
 _RATE_KEYS = frozenset({"fs", "rate", "samplerate", "samplingrate", "samplefrequency",
@@ -137,6 +139,8 @@ def _csv_names(path: Path, skip: int) -> list[str]:
     longer than ``HEAD_BYTES`` is refused.  pandas would rename a repeated name; here it is
     refused, once stripped.
     """
+    import pandas as pd  # here: loaded by the first record read, not by the parser
+
     try:
         text = head(path, skip + 1)
         if len(text) >= HEAD_BYTES and not text.endswith((b"\n", b"\r")):
@@ -165,6 +169,8 @@ def _csv_blocks(path: Path, skip: int, names: list[str], keep: list[str] | None,
     (its last field missing) is refused even when that column is not kept,
     since the missing field may be any of them.
     """
+    import pandas as pd  # here: loaded by the first record read, not by the parser
+
     try:
         with warnings.catch_warnings(), capped_source(path) as source:
             warnings.simplefilter("error", pd.errors.ParserWarning)
@@ -194,6 +200,8 @@ def _check_last_field(block: pd.DataFrame, keep: list[str], path: Path, first_li
 
 def _csv_error(path: Path, skip: int, exc: Exception) -> Exception:
     """Return the InputError for a failed CSV read (other exceptions pass through)."""
+    import pandas as pd  # here: loaded by the first record read, not by the parser
+
     if isinstance(exc, InputError):
         return exc
     if isinstance(exc, pd.errors.EmptyDataError):

@@ -1,9 +1,9 @@
-"""Model files: a fitted :class:`~fosmodel.models.model.FOSModel` as JSON, written and read back.
+"""Model files for the commands: a fitted ``FOSModel`` as JSON, written and read back checked.
 
 The file is :meth:`FOSModel.to_dict` with the record's facts in ``meta`` (source, column,
-rate).  :func:`read_model` is the one checked read of a model file (``FOSModel.load`` goes
-through it): it refuses, in one line naming the file, anything that is not such a model down
-to its numbers, and bounds what it reads before parsing it:
+rate).  :func:`read_model` is the commands' checked read of a model file: it refuses, in one
+line naming the file, anything that is not such a model down to its numbers, and bounds what
+it reads before parsing it:
 
 * a path that is not a regular file (a FIFO, a device such as ``/dev/zero``, a directory) is
   refused from its metadata, never opened for reading to its end nor waited on;
@@ -24,6 +24,7 @@ from typing import Any
 
 from ..core.exceptions import InputError
 from ..models.model import FOSModel
+from ..models.model_file import dumps
 from .model_schema import check_model_dict
 from .output import write_text
 
@@ -37,8 +38,12 @@ MAX_DIGITS = 20
 
 def write_model(path: str | os.PathLike[str], model: FOSModel,
                 meta: Mapping[str, Any]) -> None:
-    """Write ``model`` with ``meta`` (source, column, rate, ...) to ``path``, atomically."""
-    write_text(path, json.dumps(model.to_dict(dict(meta)), indent=2) + "\n")
+    """Write ``model`` with ``meta`` (source, column, rate, ...) to ``path``, atomically.
+
+    Through :func:`fosmodel.io.output.write_text`, so that the system's refusal to write is one
+    line naming the path and the output joins the command's all-or-none publishing.
+    """
+    write_text(path, dumps(model, meta))
 
 
 def read_model(path: str | os.PathLike[str]) -> FOSModel:

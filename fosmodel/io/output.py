@@ -1,10 +1,9 @@
 """Safe file output: never over an input, and either the old version or the complete new one.
 
-Every file fosmodel writes goes through :func:`atomic_write`: the content is
-written to a temporary file in the destination directory and renamed over the
-destination, so an interrupted run never leaves a half-written result.  The
-temporary file's name carries the writer's process id: one left behind by a
-killed run is removed by the next write to the same destination.  A report
+Every file fosmodel writes goes through :func:`~fosmodel.core.files.atomic_write` (a
+temporary file renamed over the destination, so an interrupted run never leaves a
+half-written result; imported here with :func:`~fosmodel.core.files.write_text` for the
+writers of reports).  A report
 directory is written beside its destination and moved into place in one step
 (:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
 that no output names a file the command reads, however the two are spelt.
@@ -21,7 +20,6 @@ two decades) that way.
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 import re
 import shutil
@@ -30,12 +28,12 @@ from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import IO, TYPE_CHECKING
 
-import numpy as np
-
 from ..core.exceptions import InputError, error_line
-from ..typeset.latex import latex_table, table_label
+from ..typeset.latex import table_label
 from ..typeset.markdown import markdown_table
+from ..typeset.tables import latex_table
 from . import journal
+from .figures import log_problems, tidy
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -312,6 +310,14 @@ def _move(tmp: Path, out: Path) -> None:
         journal.replace(tmp, out)
 
 
+def path_name(name: str) -> str:
+    """Return a column's name as a file or folder name: ``Gyro X (deg/s)`` -> ``Gyro_X_deg_s_``.
+
+    Headers hold spaces, brackets and slashes; a slash would make a folder of its own.
+    """
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip(".") or "column"
+
+
 def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str, caption: str | None = None,
                  report: str = "") -> list[Path]:
     """``stem.md``, ``stem.csv`` and ``stem.tex`` in ``out_dir``, each written atomically.
@@ -350,17 +356,21 @@ FIGURE_DPI = 300
 def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
     """Write ``stem.png`` (at :data:`FIGURE_DPI`) and ``stem.svg`` in ``out_dir``.
 
-    Each is written atomically, after :func:`plain_log_ticks`.
+    Each is written atomically, after :func:`fosmodel.io.figures.tidy` (plain, distinct tick
+    labels that bracket the data); the drawn figure is checked when ``FOSMODEL_FIGURE_LOG``
+    names a file (:func:`fosmodel.io.figures.log_problems`).
     """
     from matplotlib import rc_context  # here: writing tables or text needs no matplotlib
 
-    plain_log_ticks(fig)
+    tidy(fig)
     paths = []
     for ext in ("png", "svg"):
         path = out_dir / f"{stem}.{ext}"
         with atomic_write(path, "wb") as fh:
             fig.savefig(fh, format=ext, dpi=FIGURE_DPI)
         paths.append(path)
+        if ext == "png":
+            log_problems(fig, path)
         # Laid out by the first save: the second keeps that layout.  No engine at all, not
         # "none", whose placeholder engine still makes savefig walk the whole figure once more
         # before drawing it (a third of an SVG's time); and the rc settings that would put an
@@ -368,34 +378,3 @@ def save_figure(fig: Figure, out_dir: Path, stem: str) -> list[Path]:
         with rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
             fig.set_layout_engine(None)
     return paths
-
-
-def plain_log_ticks(fig: Figure) -> None:
-    """Label every log axis of ``fig`` that spans less than two decades in plain numbers.
-
-    Plain tick labels are ``0.02``, ``0.05``, ``0.1``.
-
-    Left to itself matplotlib labels such an axis with powers of ten at the minor ticks, or,
-    when no minor tick falls in view, with linear ticks such as ``1.22x10^1``.  Here the major
-    ticks go to 1, 2 and 5 times the powers of ten over one to two decades and to evenly spaced
-    round numbers within one decade, and every label is the number in positional notation
-    (``0.00002``, never ``2e-05``); an axis spanning more keeps its labels at the powers of ten.
-    """
-    from matplotlib import ticker  # here: writing tables or text needs no matplotlib
-
-    for ax in fig.axes:
-        for axis, limits in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
-            low, high = sorted(limits)
-            if axis.get_scale() != "log" or low <= 0 or math.log10(high / low) >= 2:
-                continue
-            axis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0))
-                                   if high / low >= 10 else
-                                   ticker.MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]))
-            axis.set_major_formatter(ticker.FuncFormatter(_plain_number))
-            axis.set_minor_formatter(ticker.NullFormatter())
-
-
-def _plain_number(value: float, _position: int | None = None) -> str:
-    """Format a tick value to three significant digits, without an exponent."""
-    return np.format_float_positional(value, precision=3, unique=True, fractional=False,
-                                      trim="-")

@@ -10,14 +10,16 @@ from __future__ import annotations
 
 import os
 from collections.abc import Collection, Iterator, Mapping
-from typing import TypeAlias
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
-import pandas as pd
 
 from ..core.exceptions import InputError
 from .positions import where
 from .timebase import STILL_ROWS, TIME_COLUMNS, check_order
+
+if TYPE_CHECKING:  # pandas is imported where a record is read: not by the CLI's help
+    import pandas as pd  # here: loaded by the first record read, not by the parser
 
 _NOT_REAL = {"c": "complex numbers", "M": "dates", "m": "time spans"}  # by numpy dtype kind
 #: Larger values overflow the sums of products the models form (degree 4 and more).
@@ -145,6 +147,8 @@ def _numeric(col: pd.Series | np.ndarray, src: str, name: str, first_line: int,
     ``offset`` is the block's first sample.  Empty cells become NaN (reported by
     :func:`_check_finite` once the whole column is read).
     """
+    import pandas as pd  # here: loaded by the first record read, not by the parser
+
     if isinstance(col, np.ndarray):
         if col.dtype.kind in "fiu":
             return col.astype(float, copy=False)

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..core.derived import (
     TIME_NAME,
+    channel_token,
     channels_read,
     cosine_name,
     derive,
@@ -114,7 +115,7 @@ class Effect:
         channel = _required(self, self.channel, "channel")
         if self.form == "fast":
             return fast_name(channel, _required(self, self.tau_s, "tau_s"))
-        return channel
+        return channel_token(channel)  # the channel itself, named so that any header fits
 
     def describe(self) -> str:
         """Return a short label: ``aux temp_c (lags 0-3)``, ``periodic 7.3137 Hz``, ..."""
@@ -167,10 +168,10 @@ class CandidateFamily:
         if effect.kind == "aux":
             name, max_lag = effect.input_name, _required(effect, effect.max_lag, "max_lag")
             exog[name] = max(exog.get(name, 0), max_lag)
-            if effect.form == "fast":
+            if name not in channels:  # a fast part, or a header spelled out as a token
                 channels = {**channels, name: derive(name, n_samples, rate, channels, {})}
-            else:
-                names.append(square_name(name))
+            if effect.form != "fast":
+                names.append(square_name(_required(effect, effect.channel, "channel")))
         elif effect.kind == "periodic":
             freq_hz = _required(effect, effect.freq_hz, "freq_hz")
             names += [cosine_name(freq_hz), sine_name(freq_hz)]

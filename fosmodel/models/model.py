@@ -18,6 +18,7 @@ from __future__ import annotations
 import copy
 import logging
 import math
+import os
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, TypeAlias
@@ -822,6 +823,42 @@ class FOSModel(BaseEstimator):
             notes.append("level@<tau>s is the exponentially weighted mean of the output's past "
                          "(time constant tau); in a free run it follows the model's own output.")
         return Summary("Fast Orthogonal Search model", info, table, notes)
+
+    def save(self, path: str | os.PathLike[str],
+             meta: Mapping[str, object] | None = None) -> None:
+        """Write the fitted model to ``path`` as the JSON ``fosmodel fit`` writes, atomically.
+
+        ``meta`` are the record's facts kept beside it (``source``, ``column``, ``rate_hz``);
+        ``fosmodel predict`` reads the file, and :meth:`load` reads it back.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> y = np.random.default_rng(0).standard_normal(500)
+        >>> model = FOSModel(max_lag=2).fit(y)
+        >>> import os, tempfile
+        >>> path = os.path.join(tempfile.mkdtemp(), "model.json")
+        >>> model.save(path, {"column": "gyro_x"})
+        >>> FOSModel.load(path).terms_ == model.terms_
+        True
+        """
+        from .model_file import save_model  # here: a model file is written only when asked
+
+        self._check_fitted()
+        save_model(path, self, meta)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> FOSModel:
+        """Read a model file (``fosmodel fit``'s, :meth:`save`'s), checked down to its numbers.
+
+        Raises
+        ------
+        InputError
+            The file cannot be read or is not a model file (the message names it and why).
+        """
+        from .model_file import load_model  # here: a model file is read only when asked
+
+        return load_model(path, cls.from_dict)
 
     def to_dict(self, meta: Mapping[str, object] | None = None) -> dict:
         """JSON-serialisable form; :meth:`from_dict` restores a model that predicts identically."""

@@ -14,6 +14,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..io.figures import legend_outside
 from ..io.output import save_figure, write_tables
 from ..typeset.latex import mathtext_units
 from .allan import AllanResult
@@ -23,30 +24,31 @@ from .allan_fit import NoiseFit
 def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
     """Plot the log-log Allan deviation with its 68 % band and the fit over it.
 
-    Each fitted term's line, their sum and the classic read-offs; below, the fit over the
-    data with the data's 68 % band.
+    The resolved terms' lines, their sum and the classic read-offs (the terms not resolved are
+    upper limits, in the tables); below, the fit over the data with the data's 68 % band.  The
+    scale follows the data and the sum, not the terms' lines, which run out of the panel; one
+    legend beside the panels.
     """
-    fig = Figure(figsize=(7.5, 6.6), layout="constrained")
+    fig = Figure(figsize=(7.5, 7.2), layout="constrained")
     ax, low = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
-    ax.fill_between(result.taus, result.lower, result.upper, color="C0", alpha=0.25,
-                    label="68 % confidence interval")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.fill_between(result.taus, result.lower, result.upper, color="C0", alpha=0.25)
     left_out = slice(0, fit.start)
-    ax.loglog(result.taus[fit.start:], result.adev[fit.start:], "o", color="C0", ms=3.5,
-              label="overlapping ADEV")
-    if fit.start:
-        ax.loglog(result.taus[left_out], result.adev[left_out], "o", mfc="none", color="C0",
-                  ms=3.5, label="left out (the sensor's filtering)")
+    ax.plot(result.taus[fit.start:], result.adev[fit.start:], "o", color="C0", ms=3.5,
+            label="overlapping ADEV and its 68 % interval")
+    if fit.start:  # hollow: the lower panel's shading says why
+        ax.plot(result.taus[left_out], result.adev[left_out], "o", mfc="none", color="C0",
+                ms=3.5)
     grid = np.geomspace(result.taus[0], result.taus[-1], 400)
-    for i, k in enumerate(fit.terms):
-        if fit.coefficients[k] > 0:
-            ax.loglog(grid, fit.term_adev(k, grid), "--" if fit.resolved[k] else ":",
-                      color=f"C{i + 1}", label=_legend(fit, k))
-    ax.loglog(grid, fit.model_adev(grid), "-", color="k", lw=1.2, label="fitted sum")
-    _readoff_marks(ax, fit)
-    ax.set_ylim(result.lower.min() / 3.0, result.upper.max() * 3.0)
+    ax.plot(grid, fit.model_adev(grid), "-", color="k", lw=1.2, label="fitted sum")
+    for i, k in enumerate(fit.terms):  # asymptotes: they leave the scale to the data
+        if fit.coefficients[k] > 0 and fit.resolved[k]:
+            ax.plot(grid, fit.term_adev(k, grid), "--", color=f"C{i + 1}", label=_legend(fit, k),
+                    scalex=False, scaley=False)
+    _readoff_marks(ax, fit, result)
     ax.set_ylabel(f"Allan deviation ({mathtext_units(result.units or 'units')})")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="x-small")
     ax.set_title(mathtext_units(f"Allan deviation and the fitted noise terms: {title}"))
     model = fit.model_adev(result.taus)
     low.fill_between(result.taus, model / result.upper, model / result.lower, color="C0",
@@ -55,23 +57,29 @@ def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
                  label="fit / data")
     low.axhline(1.0, color="0.4", lw=0.8)
     if fit.start:
-        low.axvspan(result.taus[0], fit.fitted_taus[0], color="0.85", label="left out")
+        low.axvspan(result.taus[0], fit.fitted_taus[0], color="0.85",
+                    label="left out (the sensor's filtering)")
     low.set_xlabel(r"averaging time $\tau$ (s)")
     low.set_ylabel("fit / data")
     low.grid(True, which="both", alpha=0.3)
-    low.legend(fontsize="x-small")
+    legend_outside(fig)
     return fig
 
 
-def _readoff_marks(ax: Axes, fit: NoiseFit) -> None:
-    """Mark the classic read-offs as crosses: N at 1 s, K at 3 s, and the minimum (B)."""
-    marks = [("N", 1.0, fit.readoff.get("N", math.nan), "N read-off (-1/2 line at 1 s)"),
-             ("K", 3.0, fit.readoff.get("K", math.nan), "K read-off (+1/2 line at 3 s)"),
-             ("B", fit.readoff.get("min_tau_s", math.nan), fit.readoff.get("min_adev", math.nan),
-              "minimum (in-run bias stability = 0.664 B)")]
-    for _, tau, value, label in marks:
-        if np.isfinite(tau) and np.isfinite(value):
-            ax.plot([tau], [value], "x", color="0.2", ms=8, mew=1.5, label=label)
+def _readoff_marks(ax: Axes, fit: NoiseFit, result: AllanResult) -> None:
+    """Mark the classic read-offs as crosses, one series: N at 1 s, K at 3 s, the minimum (B).
+
+    Only those within the data's range: a read-off far off the curve says nothing the
+    tables do not.
+    """
+    marks = [(1.0, fit.readoff.get("N", math.nan)), (3.0, fit.readoff.get("K", math.nan)),
+             (fit.readoff.get("min_tau_s", math.nan), fit.readoff.get("min_adev", math.nan))]
+    shown = [(t, v) for t, v in marks if np.isfinite(t) and np.isfinite(v)
+             and result.lower.min() <= v <= result.upper.max()]
+    if shown:
+        taus, values = zip(*shown)
+        ax.plot(taus, values, "x", color="0.2", ms=8, mew=1.5, scalex=False, scaley=False,
+                label="classic read-offs: N at 1 s, K at 3 s, the minimum (0.664 B)")
 
 
 def _legend(fit: NoiseFit, term: str) -> str:

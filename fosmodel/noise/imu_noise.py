@@ -46,7 +46,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -58,7 +57,7 @@ from matplotlib.figure import Figure
 
 from .._version import __version__
 from ..core.exceptions import InputError
-from ..io.output import save_figure, write_tables, write_text
+from ..io.output import path_name, save_figure, write_tables, write_text
 from ..typeset.latex import mathtext_units
 from ..typeset.summary import Summary
 from .allan import AllanResult, allan_deviation
@@ -354,7 +353,7 @@ def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str) -> list[Path]:
         fig.suptitle(title)
         paths += save_figure(fig, out_dir, f"allan_{sensor}")
     for a in noise.axes:
-        paths += write_allan(a.result, a.fit, out_dir / "axes" / _safe(a.axis.column),
+        paths += write_allan(a.result, a.fit, out_dir / "axes" / path_name(a.axis.column),
                              f"{title}: {a.axis.column}")
     files = {"imu_noise.json": _json(noise), "imu_params.m": noise.matlab_script()}
     if all(noise.of(s) for s in SENSORS):
@@ -363,11 +362,6 @@ def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str) -> list[Path]:
         write_text(out_dir / name, text)
         paths.append(out_dir / name)
     return paths
-
-
-def _safe(column: str) -> str:
-    """Return a column name as a folder name."""
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", column) or "column"
 
 
 def _json(noise: ImuNoise) -> str:

@@ -147,6 +147,70 @@ def equivalent_position_error(
     return check_positive(g, "g") * rms * t**3 / 6.0
 
 
+def segment_text(name: str, segment: slice, rate: float) -> str:
+    """Name a segment with its bounds: ``the prediction segment (360-600 s of the record)``."""
+    return (f"the {name} segment ({segment.start / rate:.6g}-{segment.stop / rate:.6g} s of "
+            "the record)")
+
+
+def metric_definitions(units: str | None, horizon_s: float, n_starts: int, predict: str,
+                       evaluate: str = "the evaluation segment") -> dict[str, str]:
+    """Define each metric the reports show, where it is shown: its units, horizon, segment.
+
+    Parameters
+    ----------
+    units : str or None
+        The record's units (None: ``units``).
+    horizon_s, n_starts : float, int
+        The outages of :func:`outage_metrics`.
+    predict, evaluate : str
+        The segments the errors and the choices are on, as :func:`segment_text` names them.
+
+    Returns
+    -------
+    dict
+        A sentence per metric: ``mse``, ``evaluate_mse``, ``position_error_m`` (the FOS
+        paper's equivalent position error), ``outage_mse``, ``outage_position_error_m`` and
+        ``bias_rms``.
+    """
+    u = units or "units"
+    return {
+        "mse": f"MSE ({u})^2: the mean square of the one-step prediction error on {predict}.",
+        "evaluate_mse": f"Evaluate MSE ({u})^2: the same on {evaluate}, where each method's "
+                        "order (and level) is chosen.",
+        "position_error_m": "Position error (m): the FOS paper's equivalent position error, "
+                            "T = 3600 s: an error of constant size sqrt(MSE) integrated freely "
+                            "for an hour, 0.5 sqrt(MSE) T^2 for an accelerometer and "
+                            "g sqrt(MSE) T^3 / 6 for a gyroscope (rad/s, g = 9.81 m/s^2). It "
+                            "ranks models by their one-step error on the paper's scale; no "
+                            "navigation run drifts an hour unaided, so it is not a position "
+                            "error to expect.",
+        "outage_mse": f"Outage MSE ({u})^2: the mean square of the error of the model's "
+                      f"{horizon_s:g} s free runs from the true past ({n_starts} outages spread "
+                      f"evenly over {predict}), over every step.",
+        "outage_position_error_m": f"Outage position error (m, {horizon_s:g} s): in each of "
+                                   f"{n_starts} outages of {horizon_s:g} s spread evenly over "
+                                   f"{predict}, the model's free run from the true past "
+                                   "compensates the sensor and what it misses is integrated "
+                                   "into position "
+                                   "(an accelerometer's twice; a gyroscope's once into a tilt, "
+                                   "times g = 9.81 m/s^2, then twice); the RMS over the outages "
+                                   "of the position error at their ends.",
+        "bias_rms": f"Bias RMS tau s ({u}): the RMS of the means of the one-step residual over "
+                    f"consecutive tau-second windows of {predict}: the slow error a filter "
+                    "sees as a bias.",
+    }
+
+
+def caption_note(horizon_s: float, n_starts: int, predict: str) -> str:
+    """Define a table's metrics in one sentence, for its caption (:func:`metric_definitions`)."""
+    return (f"Errors on {predict}: MSE of the one-step prediction; position error, the FOS "
+            "paper's equivalent position error (an error of size sqrt(MSE) integrated for "
+            f"T = 3600 s); outage position error, the RMS at the end of {n_starts} free runs of "
+            f"{horizon_s:g} s from the true past; bias RMS, the RMS of the one-step residual's "
+            "means over windows of the length given")
+
+
 # -- outages ---------------------------------------------------------------------------
 
 

@@ -11,10 +11,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from ..io.figures import fit_title, legend_outside
 from ..io.output import save_figure, write_tables, write_text
+from ..noise.metrics import caption_note, metric_definitions, segment_text
 from ..typeset.latex import mathtext_units
 from ..typeset.markdown import markdown_table
 from .harness import LEVEL, StudyResult, method_label
@@ -35,10 +38,16 @@ def _headers(result: StudyResult) -> dict[str, str]:
 
 
 def study_table(result: StudyResult, frame: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Every scored configuration (or the rows of ``frame``), with readable headers."""
+    """Every scored configuration (or the rows of ``frame``), with readable headers.
+
+    The columns that name a configuration come first (protocol, method, data, order, CP), so
+    that a table split across pages repeats them.
+    """
     frame = result.rows if frame is None else frame
-    cols = {"protocol": "Protocol", "degree": "CP", "evaluate_mse": "Evaluate MSE",
-            **_headers(result)}
+    headers = _headers(result)
+    names = {k: headers.pop(k) for k in ("label", "data", "order")}
+    cols = {"protocol": "Protocol", **names, "degree": "CP",
+            "evaluate_mse": f"Evaluate MSE ({result.config.units})^2", **headers}
     return frame[list(cols)].rename(columns=cols)
 
 
@@ -91,53 +100,92 @@ def level_table(result: StudyResult) -> pd.DataFrame:
 
 
 def order_figure(result: StudyResult, protocol: str, title: str) -> Figure:
-    """One-step prediction MSE and outage position error against model order, per method."""
+    """One-step prediction MSE and outage position error against model order, per method.
+
+    A row of panels per metric and, under the fair protocol with levels, a column per
+    family: the methods as they are, and about the local level, so that each panel shows a
+    handful of series.  A method keeps its colour and marker in every panel, methods whose
+    points coincide are set a little apart along the order axis so that none hides another,
+    and one legend sits beside the panels.  A row's scale is logarithmic when its values span
+    more than a decade.
+    """
     cfg = result.config
     rows = result.rows[result.rows["protocol"] == protocol]
     # about the level a baseline has a row per time constant: the one chosen on evaluation
     rows = rows.loc[rows.groupby(["method", "order", "degree"], sort=False)["evaluate_mse"]
                     .idxmin()]
-    fig = Figure(figsize=(10, 4.2), layout="constrained")
-    axes = fig.subplots(1, 2)
-    for ax, col, ylabel in (
-        (axes[0], "mse", mathtext_units(f"one-step prediction MSE ({cfg.units})^2")),
-        (axes[1], "outage_position_error_m",
-         f"position error after a {cfg.horizon_s:g} s outage (m)"),
-    ):
-        for (method, degree), group in rows.groupby(["method", "degree"], sort=False):
-            label = method_label(method, degree)
-            if method.removesuffix(LEVEL) == "gm":
-                ax.axhline(group[col].iloc[0], ls="--" if method == "gm" else ":", color="0.5",
-                           label=label)
-            else:
-                group = group.sort_values("order")
-                ax.plot(group["order"], group[col], marker="o", label=label)
-        ax.set_yscale("log")
-        ax.set_xlabel("model order (maximum lag L)")
-        ax.set_ylabel(ylabel)
-        ax.set_xticks(sorted(rows["order"].unique()))
-        ax.grid(True, which="both", alpha=0.3)
-    axes[0].legend(fontsize="small")
-    fig.suptitle(mathtext_units(f"Prediction error against model order, {protocol} protocol: "
-                                f"{title}"))
+    level = rows["method"].str.endswith(LEVEL)
+    families = [("as they are", ~level), ("about the local level", level)] if level.any() \
+        else [("", ~level)]
+    styles = _styles(rows)
+    fig = Figure(figsize=(3.4 + 3.6 * len(families), 6.2), layout="constrained")
+    axes = fig.subplots(2, len(families), squeeze=False, sharex=True, sharey="row")
+    metrics = (("mse", mathtext_units(f"one-step prediction MSE ({cfg.units})^2")),
+               ("outage_position_error_m",
+                # two lines: one would run into the MSE label of the panel above
+                f"position error after\na {cfg.horizon_s:g} s outage (m)"))
+    for column, (family, chosen) in enumerate(families):
+        series = list(rows[chosen].groupby(["method", "degree"], sort=False))
+        dodge = np.linspace(-0.25, 0.25, len(series)) if len(series) > 1 else [0.0]
+        for row, (key, ylabel) in enumerate(metrics):
+            ax = axes[row][column]
+            for shift, ((method, degree), group) in zip(dodge, series):
+                base = method.removesuffix(LEVEL)
+                color, marker = styles[base, degree]
+                data = group["data"].iloc[0]
+                label = method_label(base, degree) + ("" if data == "raw" else f" ({data})")
+                if base == "gm":
+                    ax.axhline(group[key].iloc[0], ls="--", color=color, label=label)
+                else:
+                    group = group.sort_values("order")
+                    ax.plot(group["order"] + shift, group[key], marker=marker, color=color,
+                            label=label, lw=1.2, ms=4.5)
+            ax.set_xticks(sorted(rows["order"].unique()))
+            ax.grid(True, which="both", alpha=0.3)
+            if column == 0:
+                ax.set_ylabel(ylabel)
+            if row == 0 and family:
+                ax.set_title(f"methods {family}", fontsize="medium")
+            if row == 1:
+                ax.set_xlabel("model order (maximum lag L)")
+        for row, (key, _) in enumerate(metrics):
+            values = rows[key].to_numpy(dtype=float)
+            values = values[np.isfinite(values) & (values > 0)]
+            if len(values) and values.max() > 10 * values.min():
+                axes[row][0].set_yscale("log")
+    legend_outside(fig)
+    fit_title(fig, f"Prediction error against model order, {protocol} protocol",
+              mathtext_units(title))
     return fig
+
+
+def _styles(rows: pd.DataFrame) -> dict[tuple[str, int], tuple[str, str]]:
+    """Give each method (FOS per degree) one colour and marker for every panel."""
+    order = ["fos", *(m for m in _ORDER if m != "fos")]  # FOS first: the blue, the circles
+    keys = sorted({(m.removesuffix(LEVEL), int(d)) for m, d in zip(rows["method"], rows["degree"])},
+                  key=lambda k: (order.index(k[0]), k[1]))
+    markers = "osD^vPX*"
+    return {k: (f"C{i % 10}", markers[i % len(markers)]) for i, k in enumerate(keys)}
 
 
 def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
     """Every table and figure of a study, plus ``report.md`` that shows them."""
     out_dir.mkdir(parents=True, exist_ok=True)
     orders = " and ".join(map(str, table_orders(result)))
+    note = caption_note(result.config.horizon_s, result.config.n_starts,
+                        segment_text("prediction", result.split.predict, result.config.rate))
     tables = {
         "comparison": (paper_table(result), f"{title}: prediction and outage errors of every "
-                       f"method at model orders {orders} (the FOS paper's Tables 1-2 layout)"),
-        "study": (study_table(result), f"{title}: every configuration scored"),
+                       f"method at model orders {orders} (the FOS paper's Tables 1-2 layout). "
+                       f"{note}"),
+        "study": (study_table(result), f"{title}: every configuration scored. {note}"),
         "best": (study_table(result, result.best()),
                  f"{title}: the best configuration of each method, chosen on the evaluation "
-                 "segment"),
+                 f"segment. {note}"),
     }
     if result.config.levels and "fair" in result.config.protocols:
         tables["level"] = (level_table(result), f"{title}: each method about the local level "
-                           "(fair protocol)")
+                           f"(fair protocol). {note}")
     paths = []
     for stem, (table, caption) in tables.items():
         paths += write_tables(table, out_dir, stem, caption, report=title)
@@ -167,6 +215,7 @@ def report_markdown(result: StudyResult, title: str) -> str:
         f"## Comparison at orders {' and '.join(map(str, table_orders(result)))} (FOS paper, "
         "Tables 1-2 layout)", "",
         markdown_table(paper_table(result), digits=4), "",
+        *_definitions(result), "",
         "## Best configuration per method (chosen on the evaluation segment)", "",
         markdown_table(study_table(result, result.best()), digits=4), "",
     ]
@@ -188,3 +237,13 @@ def report_markdown(result: StudyResult, title: str) -> str:
         lines += ["## Warnings", "", *[f"- {w}" for w in result.warnings], ""]
     lines += ["All rows: `study.csv` (also `.md`, `.tex`).", ""]
     return "\n".join(lines)
+
+
+def _definitions(result: StudyResult) -> list[str]:
+    """List under the first table what each metric is: its units, horizon and segment."""
+    cfg, split = result.config, result.split
+    defined = metric_definitions(cfg.units, cfg.horizon_s, cfg.n_starts,
+                                 segment_text("prediction", split.predict, cfg.rate),
+                                 segment_text("evaluation", split.evaluate, cfg.rate))
+    keys = ("mse", "position_error_m", "outage_position_error_m", "bias_rms", "evaluate_mse")
+    return ["What the columns are:", "", *[f"- {defined[k]}" for k in keys]]

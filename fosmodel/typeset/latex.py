@@ -1,24 +1,18 @@
-r"""LaTeX for papers: escaped text with typeset units, numbers, and booktabs tables.
+r"""LaTeX for papers: escaped text with typeset units, numbers, and the tables' labels.
 
-Every LaTeX table fosmodel writes goes through :func:`latex_table` (reports through
-:func:`fosmodel.io.output.write_tables`, fit summaries through
-:meth:`fosmodel.typeset.summary.Summary.as_latex`): a ``table`` float with a caption and a
-stable label (:func:`table_label`), booktabs rules (``\toprule``, ``\midrule``,
-``\bottomrule``), text with LaTeX's special characters escaped and units typeset
-(:func:`latex_text`: ``m/s^2`` as ``m/s$^{2}$``, ``deg/sqrt(h)`` as
-``deg/$\sqrt{\mathrm{h}}$``) and numbers to four significant digits with powers of ten in
-math mode (:func:`latex_number`: ``1e-05`` as ``$1\times10^{-5}$``).  The tables need the
-``booktabs`` package.  :func:`mathtext_units` types the same units for matplotlib's labels, so
-a unit reads one way in the figures and the tables.
+Text with LaTeX's special characters escaped and units typeset (:func:`latex_text`: ``m/s^2``
+as ``m/s$^{2}$``, ``deg/sqrt(h)`` as ``deg/$\sqrt{\mathrm{h}}$``), numbers to four significant
+digits with powers of ten in math mode (:func:`latex_number`: ``1e-05`` as
+``$1\times10^{-5}$``) and the stable labels of tables (:func:`table_label`); the tables
+themselves are laid out for the page by :mod:`fosmodel.typeset.tables`.
+:func:`mathtext_units` types the same units for matplotlib's labels, so a unit reads one way
+in the figures and the tables.
 """
 
 from __future__ import annotations
 
 import math
-import numbers
 import re
-
-import pandas as pd
 
 _LATEX_SPECIAL = {"\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#",
                   "_": r"\_", "{": r"\{", "}": r"\}", "~": r"\textasciitilde{}",
@@ -90,22 +84,6 @@ def latex_number(value: float, digits: int = 4) -> str:
     return f"${mantissa}$" if mantissa.startswith("-") else mantissa
 
 
-def latex_cell(value: object, digits: int = 4) -> str:
-    """Write one table cell: a number by :func:`latex_number`, None as ``--``.
-
-    Anything else is text, by :func:`latex_text`.
-    """
-    if value is None:
-        return "--"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, numbers.Integral):
-        return latex_number(float(value), digits=max(digits, len(str(abs(int(value))))))
-    if isinstance(value, numbers.Real):
-        return latex_number(float(value), digits)
-    return latex_text(str(value))
-
-
 def table_label(*parts: str) -> str:
     """Return ``tab:fosmodel-<parts>``, a LaTeX label of the parts' letters and digits.
 
@@ -113,30 +91,3 @@ def table_label(*parts: str) -> str:
     """
     slug = re.sub(r"[^a-z0-9]+", "-", "-".join(parts).lower()).strip("-")
     return f"tab:fosmodel-{slug}" if slug else "tab:fosmodel"
-
-
-def latex_table(frame: pd.DataFrame, caption: str, label: str, digits: int = 4) -> str:
-    r"""Write ``frame`` as a LaTeX ``table`` float with booktabs rules, a caption and a label.
-
-    Parameters
-    ----------
-    frame : DataFrame
-        The table; its index is left out.  Numeric columns are right-aligned, others left.
-    caption : str
-        Plain text; escaped here.
-    label : str
-        The ``\label`` (see :func:`table_label`).
-    digits : int, default 4
-        Significant digits of the numbers.
-
-    Returns
-    -------
-    str
-        The LaTeX source, ending in a newline; it needs ``\usepackage{booktabs}``.
-    """
-    spec = "".join("r" if pd.api.types.is_numeric_dtype(dtype) and
-                   not pd.api.types.is_bool_dtype(dtype) else "l" for dtype in frame.dtypes)
-    body = frame.set_axis([latex_text(str(c)) for c in frame.columns], axis=1)
-    return body.to_latex(index=False, escape=False, column_format=spec, position="htbp",
-                         caption=latex_text(caption), label=label, na_rep="--",
-                         formatters=[lambda v: latex_cell(v, digits)] * frame.shape[1])

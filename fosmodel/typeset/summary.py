@@ -7,8 +7,9 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
-from .latex import latex_table, latex_text, table_label
+from .latex import latex_text, table_label
 from .markdown import markdown_table
+from .tables import latex_table
 
 _WIDTH = 78
 
@@ -73,7 +74,7 @@ class Summary:
     def as_latex(self) -> str:
         """Return the facts and the table as two LaTeX tables, the notes as an ``enumerate``.
 
-        The tables come from :func:`~fosmodel.typeset.latex.latex_table` (booktabs rules, a
+        The tables come from :func:`~fosmodel.typeset.tables.latex_table` (booktabs rules, a
         caption, the labels ``tab:fosmodel-<title>-facts`` and ``tab:fosmodel-<title>``);
         every special character is escaped, units are typeset.
         """

@@ -158,13 +158,9 @@ def _steps(rec: Record, axes: list[Axis], aux: dict[str, np.ndarray],
            config: FleetConfig) -> _Outcome:
     """Run the chosen steps on every axis, as the six-axis workflow does with one job."""
     rate, n = rec.require_rate(), rec.n_samples
-    imu = replace(config.imu, n_jobs=1)
-    if config.split is not None:
-        train_s, evaluate_s = config.split.seconds(n, rate)
-        imu = replace(imu, train_s=train_s, evaluate_s=evaluate_s)
-    if config.loop_split is not None:
-        imu = replace(imu, loop_split=config.loop_split.fractions(n, rate))
-    imu.check(n, rate, axes, config.steps)
+    at = partial(_imu_at, config, rate=rate)
+    at(n).check(n, rate, axes, config.steps, at=at)  # one message if the record is too short
+    imu = at(n).for_record(n, rate)  # the loop on the study's segments, unless given its own
     columns = {a.column: rec.column(a.column) for a in axes}
     channels = {**columns, **aux}
     out = _Outcome(rec, axes, aux, imu)
@@ -180,6 +176,23 @@ def _steps(rec: Record, axes: list[Axis], aux: dict[str, np.ndarray],
         out.loop[a.column] = out.timed("loop", a.column, partial(
             close_loop, columns[a.column], others, imu.loop_config(rate, a)))
     return out
+
+
+def _imu_at(config: FleetConfig, n: int, rate: float) -> ImuConfig:
+    """Return the steps' settings for a record of ``n`` samples: the splits resolved on it.
+
+    Raises
+    ------
+    InputError
+        A split in percent that leaves nothing to predict.
+    """
+    imu = replace(config.imu, n_jobs=1)
+    if config.split is not None:
+        train_s, evaluate_s = config.split.seconds(n, rate)
+        imu = replace(imu, train_s=train_s, evaluate_s=evaluate_s)
+    if config.loop_split is not None:
+        imu = replace(imu, loop_split=config.loop_split.fractions(n, rate))
+    return imu
 
 
 def _rows(name: str, outcome: _Outcome) -> pd.DataFrame:

@@ -16,7 +16,7 @@ from __future__ import annotations
 import re
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -52,8 +52,10 @@ class ImuConfig:
         The study's fitting and selection segments (s); the rest is predicted.
     horizon_s, n_starts : float, int
         Outage metrics of the study and the loop.
-    loop_split : tuple of float
-        Fractions of the record the loop fits on and evaluates on.
+    loop_split : tuple of float, optional
+        Fractions of the record the loop fits on and evaluates on (default: the study's
+        segments, so that both steps score on one prediction segment; :meth:`for_record`
+        resolves them against a record).
     loop_max_lag : int
         L of the loop's starting model.
     min_tau : float, optional
@@ -70,7 +72,7 @@ class ImuConfig:
     evaluate_s: float = 180.0
     horizon_s: float = 30.0
     n_starts: int = 20
-    loop_split: tuple[float, float] = (0.5, 0.2)
+    loop_split: tuple[float, float] | None = None
     loop_max_lag: int = 10
     min_tau: float | None = None
     n_jobs: int = 2
@@ -82,30 +84,121 @@ class ImuConfig:
                            train_s=self.train_s, evaluate_s=self.evaluate_s,
                            horizon_s=self.horizon_s, n_starts=self.n_starts)
 
-    def check(self, n: int, rate: float, axes: Sequence[Axis],
-              steps: Sequence[str] = STEPS) -> None:
+    def for_record(self, n: int, rate: float) -> ImuConfig:
+        """Return this configuration with the loop's split resolved for ``n`` samples at ``rate``.
+
+        Without a ``loop_split`` of its own the loop takes the study's segments: ``train_s``
+        and ``evaluate_s`` as fractions of the record (the same sample bounds).
+        """
+        if self.loop_split is not None:
+            return self
+        return replace(self, loop_split=(self.train_s * rate / n, self.evaluate_s * rate / n))
+
+    def check(self, n: int, rate: float, axes: Sequence[Axis], steps: Sequence[str] = STEPS,
+              at: Callable[[int], ImuConfig] | None = None) -> None:
         """Refuse, before any work, a record the steps cannot split or units they cannot take.
 
-        ``n`` is the record's length in samples; ``steps`` are those that will run.
+        ``n`` is the record's length in samples; ``steps`` are those that will run.  A record
+        too short for the study or the loop is refused in one message that gives the least
+        length each step needs with these settings, and why.  ``at(m)`` is the configuration
+        for a record of ``m`` samples (default: this one), for splits given in percent of
+        the record or in seconds before they are resolved.
 
         Raises
         ------
         InputError
-            From :func:`fosmodel.study.harness.study_split`,
-            :func:`fosmodel.loop.closeloop.loop_split` or the configurations.
+            A record too short for the steps' splits, or a setting the configurations refuse.
         """
-        for axis in axes:
+        if not axes:
+            return
+        at = at or (lambda m: self)
+        axis = axes[0]  # every axis is split alike
+
+        def study(m: int) -> None:
+            study_split(m, at(m).study_config(rate, axis))
+
+        def loop(m: int) -> None:
+            config = at(m)
+            if config.loop_split is None and config.train_s + config.evaluate_s >= m / rate:
+                raise InputError("on the study's segments, which the record does not hold")
+            loop_split(m, config.for_record(m, rate).loop_config(rate, axis))
+
+        short = {}
+        for step, check in (("study", study), ("loop", loop)):
+            if step in steps:
+                try:
+                    check(n)
+                except InputError as error:
+                    short[step] = (_least_length(check, n), str(error))
+        if short:
+            raise InputError(_too_short(n, rate, short))
+        resolved = at(n).for_record(n, rate)
+        for axis in axes[1:]:  # their sensors and units
             if "study" in steps:
-                study_split(n, self.study_config(rate, axis))
+                resolved.study_config(rate, axis)
             if "loop" in steps:
-                loop_split(n, self.loop_config(rate, axis))
+                resolved.loop_config(rate, axis)
 
     def loop_config(self, rate: float, axis: Axis) -> LoopConfig:
-        """Configure the residual loop of one axis."""
+        """Configure the residual loop of one axis (of a configuration :meth:`for_record`).
+
+        Raises
+        ------
+        ValueError
+            The loop's split is not resolved yet.
+        """
+        if self.loop_split is None:
+            raise ValueError("the loop's split follows the study's: resolve it against the "
+                             "record with for_record(n, rate)")
         return LoopConfig(rate=rate, sensor=axis.sensor, units=axis.units,
                           max_lag=self.loop_max_lag, train=self.loop_split[0],
                           evaluate=self.loop_split[1], horizon_s=self.horizon_s,
                           n_starts=self.n_starts)
+
+
+def _least_length(check: Callable[[int], object], n: int) -> int | None:
+    """Return the fewest samples above ``n`` that ``check`` takes, or None if no length does.
+
+    ``check(m)`` raises InputError for a record of ``m`` samples too short; a longer record
+    passes whenever a shorter one does.
+    """
+    def fits(m: int) -> bool:
+        try:
+            check(m)
+        except InputError:
+            return False
+        return True
+
+    low, high = n, max(2 * n, 2)
+    while not fits(high):
+        if high > 2**40:  # some segment is too short whatever the record's length
+            return None
+        low, high = high, 2 * high
+    while high - low > 1:  # low fails, high fits
+        mid = (low + high) // 2
+        low, high = (low, mid) if fits(mid) else (mid, high)
+    return high
+
+
+def _too_short(n: int, rate: float, short: Mapping[str, tuple[int | None, str]]) -> str:
+    """Say in one message how long a record the settings need, each step's need and why."""
+    least = [m for m, _ in short.values()]
+    needs = "; ".join(
+        f"the {step} " + ("cannot run with these settings, whatever the record's length"
+                          if m is None else f"needs {m / rate:.6g} s")
+        + f" ({_RECORD.sub('', why)})" for step, (m, why) in short.items())
+    head = (f"the record has {n} samples ({n / rate:.6g} s at {rate:g} Hz), too short for "
+            "these settings")
+    if None in least:  # a segment too short for its windows: a longer record cannot help
+        return f"{head}: {needs}; change --split (the loop's: --loop-split) or --horizon"
+    head += f", which need at least {max(m for m in least if m) / rate:.6g} s"
+    return (f"{head}: {needs}; shorten --split (the loop's: --loop-split) or --horizon, or "
+            "give a longer record")
+
+
+#: The record's length at the head of a step's own message (the message above says it once).
+_RECORD = re.compile(r"^the record has \d+ samples \([^)]*\); |^the record \([^)]*\) is too "
+                     r"short for ")
 
 
 @dataclass
@@ -241,11 +334,12 @@ def run_imu(
         No axis, an axis missing from ``columns``, columns of unequal length, or a record
         too short for the study's or the loop's split (before any work).
     """
-    config = config or ImuConfig()
     say = progress or (lambda line: None)
     _check(columns, axes, aux or {})
     n = len(columns[axes[0].column])
+    config = config or ImuConfig()
     config.check(n, rate, axes)
+    config = config.for_record(n, rate)
     start = time.perf_counter()
     noise = imu_noise(columns, axes, rate, source, min_tau=config.min_tau)
     allan_s = time.perf_counter() - start
@@ -304,27 +398,51 @@ def _brief(step: str, outcome: StudyResult | LoopResult) -> str:
     return f"{len(kept)} effect(s) kept"
 
 
-def _best(rows: pd.DataFrame, fos: bool) -> pd.Series:
-    """Return the row with the lowest evaluation MSE among FOS's forms or the baselines'."""
+def _best(rows: pd.DataFrame, fos: bool) -> pd.Series | None:
+    """Return the row with the lowest evaluation MSE among FOS's forms or the baselines'.
+
+    None when the study ran none of them (``methods`` without FOS, or FOS alone).
+    """
     is_fos = rows["method"].str.startswith("fos")
     pick = rows[is_fos if fos else ~is_fos]
-    return pick.loc[pick["evaluate_mse"].idxmin()]
+    return None if pick.empty else pick.loc[pick["evaluate_mse"].idxmin()]
 
 
 def study_row(axis: Axis, study: StudyResult) -> dict[str, Any]:
-    """Tabulate the best FOS and the best baseline of an axis's study (a row of the tables)."""
+    """Tabulate the best FOS and the best baseline of an axis's study (a row of the tables).
+
+    A side the study did not run (FOS alone, or baselines alone) is ``not studied``, its
+    errors and the ratio NaN: the columns are the same whatever the methods.
+    """
     rows = study.rows[study.rows["protocol"] == "fair"] if "fair" in \
         study.config.protocols else study.rows
     fos, base = _best(rows, True), _best(rows, False)
+    outage, bias = study_columns(study.config.horizon_s)
     return {"axis": axis.column, "units": axis.units,
-            "FOS": f"{fos['label']} L={fos['order']}",
-            "FOS outage error (m, 30 s)": fos["outage_position_error_m"],
-            "FOS bias RMS 30 s": fos["bias_rms_30s"],
-            "best baseline": f"{base['label']} L={base['order']}",
-            "baseline outage error (m, 30 s)": base["outage_position_error_m"],
-            "baseline bias RMS 30 s": base["bias_rms_30s"],
-            "FOS / baseline (outage)": fos["outage_position_error_m"]
-            / base["outage_position_error_m"]}
+            "FOS": _chosen(fos),
+            f"FOS {outage}": _value(fos, "outage_position_error_m"),
+            f"FOS {bias}": _value(fos, "bias_rms_30s"),
+            "best baseline": _chosen(base),
+            f"baseline {outage}": _value(base, "outage_position_error_m"),
+            f"baseline {bias}": _value(base, "bias_rms_30s"),
+            "FOS / baseline (outage)": _value(fos, "outage_position_error_m")
+            / _value(base, "outage_position_error_m")}
+
+
+def study_columns(horizon_s: float) -> tuple[str, str]:
+    """Return the names of the outage error and bias columns of :func:`study_row`.
+
+    They end each table's FOS and baseline heads; the outage horizon is the study's.
+    """
+    return f"outage error (m, {horizon_s:g} s)", "bias RMS 30 s"
+
+
+def _chosen(row: pd.Series | None) -> str:
+    return "not studied" if row is None else f"{row['label']} L={row['order']}"
+
+
+def _value(row: pd.Series | None, key: str) -> float:
+    return np.nan if row is None else float(row[key])
 
 
 def loop_row(axis: Axis, loop: LoopResult) -> dict[str, Any]:

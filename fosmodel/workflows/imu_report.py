@@ -26,15 +26,16 @@ import pandas as pd
 
 from ..core.parallel import in_workers
 from ..io.model_file import write_model
-from ..io.output import write_tables, write_text
+from ..io.output import path_name, write_tables, write_text
 from ..loop.closeloop import LoopResult
 from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
 from ..noise.axes import Axis
 from ..noise.imu_noise import ImuNoise, write_imu_noise
+from ..noise.metrics import metric_definitions, segment_text
 from ..study.harness import StudyResult
 from ..study.report import write_study
 from ..typeset.markdown import markdown_table
-from .imu import AxisResult, ImuResult
+from .imu import AxisResult, ImuResult, study_columns
 
 
 def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]:
@@ -74,12 +75,18 @@ def write_imu_tables(result: ImuResult, out_dir: Path,
     dict
         Each table's stem to the table and its caption.
     """
+    study, loop = _segments(result)
+    cfg = result.config
     tables = {
         "noise": (result.noise.table(), f"{title}: Allan noise parameters of every axis"),
         "study": (result.study_table(), f"{title}: best FOS and best baseline of each axis "
-                  "(chosen on the evaluation segment), errors on the prediction segment"),
+                  f"(chosen on the evaluation segment), errors on {study}: outage error, the "
+                  f"RMS position error at the end of {cfg.n_starts} free runs of "
+                  f"{cfg.horizon_s:g} s; bias RMS, the RMS of the one-step residual's 30 s "
+                  "means (in the axis's units)"),
         "loop": (result.loop_table(), f"{title}: the residual loop of each axis, errors on "
-                 "the prediction segment before and after the effects kept"),
+                 f"{loop} before and after the effects kept (outage error: at the end of "
+                 f"{cfg.horizon_s:g} s free runs; bias RMS in the axis's units)"),
         "timing": (result.timing_table(), f"{title}: run time of each step"),
     }
     for stem, (frame, caption) in tables.items():
@@ -106,17 +113,20 @@ def report_parts(
     """List the reports of the steps given, each a writer and its arguments.
 
     The noise of every axis in ``noise/``, and each axis's study and loop in
-    ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of the steps it ran).
+    ``study/AXIS/`` and ``loop/AXIS/`` (a fleet's record writes those of the steps it ran),
+    ``AXIS`` the column's name as a file name (:func:`fosmodel.io.output.path_name`).
     """
     parts: list[tuple[Callable, tuple]] = []
     if noise is not None:
         parts.append((write_imu_noise, (noise, _mkdir(out_dir / "noise"), title)))
     for a in axes:
         if studies:
-            parts.append((write_study, (studies[a.column], out_dir / "study" / a.column,
+            parts.append((write_study, (studies[a.column],
+                                        out_dir / "study" / path_name(a.column),
                                         f"{title} {a.column} ({a.units})")))
         if loops:
-            parts.append((write_loop_report, (loops[a.column], out_dir / "loop" / a.column,
+            parts.append((write_loop_report, (loops[a.column],
+                                              out_dir / "loop" / path_name(a.column),
                                               f"{title} {a.column}")))
     return parts
 
@@ -136,7 +146,7 @@ def _write_model(result: ImuResult, a: AxisResult, folder: Path) -> tuple[Path, 
     bound, which = ((a.loop.base_model, "the loop's starting model (its effects made the "
                      "prediction segment worse)") if worse and a.loop.steps
                     else (a.loop.final_model, "the loop's final model"))
-    path = folder / f"{a.axis.column}.json"
+    path = folder / f"{path_name(a.axis.column)}.json"
     meta = {"source": result.source, "column": a.axis.column, "units": a.axis.units,
             "sensor": a.axis.sensor, "rate_hz": result.rate, "n_samples": result.n_samples,
             "fitted_on": "close-loop fitting segment", "model": which}
@@ -171,6 +181,8 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
         frame, caption = tables[stem]
         lines += [f"## {heading}", "", text, "", f"Table: {caption}.", "",
                   markdown_table(frame, digits=4), ""]
+        if stem != "noise":
+            lines += [*_definitions(result, stem), ""]
         if stem == "loop":
             lines += _loop_warnings(result)
     lines += ["## Error models for a filter", "",
@@ -188,6 +200,32 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
     return "\n".join(lines)
 
 
+def _segments(result: ImuResult) -> tuple[str, str]:
+    """Name the prediction segments of the study and of the loop, with their bounds (s)."""
+    a = result.axes[0]
+    return (segment_text("prediction", a.study.split.predict, result.rate),
+            segment_text("prediction", a.loop.segments.predict, result.rate))
+
+
+def _definitions(result: ImuResult, stem: str) -> list[str]:
+    """Define the study's or the loop's columns: units, horizon, segment."""
+    study, loop = _segments(result)
+    cfg = result.config
+    defined = metric_definitions(None, cfg.horizon_s, cfg.n_starts,
+                                 study if stem == "study" else loop)
+    same = (" (the study's: both steps score on one segment)" if study == loop
+            else f" (not the study's {study.removeprefix('the ')})")
+    lines = [f"- {defined['outage_position_error_m']}",
+             f"- {defined['bias_rms'].replace('(units)', '(the axis units)')}"]
+    if stem == "loop":
+        lines.insert(0, f"- Errors on {loop}{same}, of the loop's starting model (before) and "
+                        "final model (after).")
+    else:
+        lines.append("- FOS / baseline (outage): the first outage error over the second; below "
+                     "1, FOS does better.")
+    return ["What the columns are:", "", *lines]
+
+
 def _loop_warnings(result: ImuResult) -> list[str]:
     """Say in a plain sentence for every axis whose kept effects made unseen data worse."""
     out = []
@@ -203,25 +241,32 @@ def _loop_warnings(result: ImuResult) -> list[str]:
 def console_summary(result: ImuResult) -> str:
     """Summarise the report for a console, in lines of at most 100 characters.
 
-    A line per axis: its noise terms, the 30 s outage error of the best FOS and the best
+    A line per axis: its noise terms, the outage error of the best FOS and the best
     baseline, and the loop's effects with the error before and after them (the report has
     the rest); then a sentence for each axis whose effects did not hold up.
     """
     noise = result.noise.table().set_index("Column")
     study, loop = result.study_table(), result.loop_table()
+    outage = study_columns(result.config.horizon_s)[0]
     frame = pd.DataFrame({
         "axis": study["axis"],
         "N": [noise.loc[c, "N fitted"] for c in study["axis"]],
         "B": [noise.loc[c, "B fitted"] for c in study["axis"]],
         "K": [noise.loc[c, "K fitted"] for c in study["axis"]],
-        "FOS (m)": study["FOS outage error (m, 30 s)"].map("{:.3g}".format),
-        "base (m)": study["baseline outage error (m, 30 s)"].map("{:.3g}".format),
+        "FOS (m)": study[f"FOS {outage}"].map(_brief_number),
+        "base (m)": study[f"baseline {outage}"].map(_brief_number),
         "kept": loop["effects kept"],
         "loop (m)": [f"{b:.3g} -> {a:.3g}" for b, a in
                      zip(loop["outage error before (m)"], loop["outage error after (m)"])],
     })
-    lines = ["Noise terms (Allan), 30 s outage position error of the best FOS and baseline "
+    lines = [f"Noise terms (Allan), {result.config.horizon_s:g} s outage position error of "
+             "the best FOS and baseline "
              "(study),", "effects kept and outage error before -> after (loop), prediction "
              "segment:", frame.to_string(index=False)]
     lines += [textwrap.fill(line, CONSOLE_WIDTH) for line in _loop_warnings(result)[:-1]]
     return "\n".join(lines)
+
+
+def _brief_number(value: float) -> str:
+    """Three significant digits; ``-`` for a side the study did not run (NaN)."""
+    return "-" if value != value else f"{value:.3g}"

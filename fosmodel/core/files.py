@@ -1,0 +1,125 @@
+"""Files written whole or not at all, and text files read with one-line errors.
+
+Every file fosmodel writes goes through :func:`atomic_write`: the content is written to a
+temporary file in the destination directory and renamed over the destination, so an
+interrupted run never leaves a half-written result.  The temporary file's name carries the
+writer's process id: one left behind by a killed run is removed by the next write to the
+same destination.  Here, at the bottom of the layers, so that a fitted model can save itself
+(:meth:`fosmodel.models.model.FOSModel.save`); :mod:`fosmodel.io.output` builds reports on it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import shutil
+import uuid
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO
+
+from .exceptions import InputError
+
+
+def temporary_path(path: Path, suffix: str) -> Path:
+    """Return a fresh name beside ``path`` that carries this process's id."""
+    return path.parent / f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}{suffix}"
+
+
+def stale_temporaries(path: Path, suffix: str) -> Iterator[Path]:
+    """Temporary files or directories for ``path`` whose writer is no longer running."""
+    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(\d+)\.[0-9a-f]{{12}}{re.escape(suffix)}$")
+    with contextlib.suppress(OSError):
+        for item in path.parent.iterdir():
+            m = pattern.match(item.name)
+            if m and not _alive(int(m.group(1))):
+                yield item
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def remove_path(item: Path) -> None:
+    """Remove a file or a directory tree, if it is still there."""
+    if item.is_dir() and not item.is_symlink():
+        shutil.rmtree(item, ignore_errors=True)
+    else:
+        with contextlib.suppress(FileNotFoundError):
+            item.unlink()
+
+
+@contextlib.contextmanager
+def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
+    """Open a temporary file beside ``path``; rename it onto ``path`` on success.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination.  Its directory must exist.
+    mode : {"w", "wb"}
+        Text or binary mode.
+
+    Yields
+    ------
+    file object
+        Write the content to it.  If the body raises, the temporary file is
+        removed and ``path`` is left untouched.
+    """
+    if mode not in ("w", "wb"):
+        raise ValueError(f"mode must be 'w' or 'wb', not {mode!r}")
+    path = Path(path)
+    for item in stale_temporaries(path, ".tmp"):  # left behind by a killed run
+        remove_path(item)
+    tmp = temporary_path(path, ".tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
+    try:
+        fh = (os.fdopen(fd, "w", encoding="utf-8", newline="") if mode == "w"
+              else os.fdopen(fd, "wb"))
+        with fh:
+            yield fh
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` atomically (UTF-8)."""
+    with atomic_write(path, "w") as fh:
+        fh.write(text)
+
+
+def _mode() -> int:
+    """Return the permission bits of a new file under the process's umask (0666 & ~umask)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def read_text(path: str | os.PathLike[str], what: str) -> str:
+    """Return the UTF-8 text of ``path``, a ``what`` (``"model"``...) the caller reads.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read, or is not UTF-8 text (the message names it).
+    """
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a {what} file (not UTF-8 text)") from None
