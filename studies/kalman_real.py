@@ -96,7 +96,7 @@ def load_axes() -> dict[str, np.ndarray]:
     ``"imu1 ax"``."""
     out = {}
     for k in SESSIONS:
-        rec = load_record(DATA / "adis16405" / f"imu{k}.csv.gz", rate=100)
+        rec = load_record(DATA / "adis16405" / f"imu{k}.csv.gz", rate=100, outliers="keep")
         for column in COLUMNS:
             y = np.asarray(rec.column(column), dtype=float) * STANDARD_GRAVITY
             n = len(y) // BLOCK * BLOCK

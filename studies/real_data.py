@@ -76,11 +76,12 @@ def records() -> dict[str, tuple[Record, dict]]:
     The MTi-G gyro comes twice: with its outliers kept and clipped.
     """
     mtig = DATA / "mtig_contaminated" / "gyro_x.csv.gz"
-    reads = {f"ADIS16405 imu{k}": ((DATA / "adis16405" / f"imu{k}.csv.gz",), {"rate": 100},
+    reads = {f"ADIS16405 imu{k}": ((DATA / "adis16405" / f"imu{k}.csv.gz",),
+                                   {"rate": 100, "outliers": "keep"},
                                    ADIS) for k in range(1, 7)}
     reads[SUNSIDED_NAME] = ((DATA / "mpu6050_sunsided" / SUNSIDED_FILE,), {"uniform": True},
                             SUNSIDED)
-    reads[MTIG_KEEP] = ((mtig,), {"rate": 100}, MTIG)
+    reads[MTIG_KEEP] = ((mtig,), {"rate": 100, "outliers": "keep"}, MTIG)
     reads[MTIG_CLIP] = ((mtig,), {"rate": 100, "outliers": "clip"}, MTIG)
     loaded = in_workers(((_read, (args, options)) for args, options, _ in reads.values()), JOBS)
     out = {name: (rec, axes) for (name, (*_, axes)), rec in zip(reads.items(), loaded)}

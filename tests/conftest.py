@@ -223,3 +223,44 @@ def imu_bag(tmp_path: Path) -> Callable[..., tuple[Path, dict[str, dict[str, np.
         return path, arrays
 
     return write
+
+
+_MEASURED = r"""
+import json, re, resource, sys
+resource.setrlimit(resource.RLIMIT_AS, (4 * 2**30, 4 * 2**30))  # address space (BLAS reserves)
+from fosmodel.cli import main
+for argv in json.loads(sys.argv[1]):
+    with open("/proc/self/clear_refs", "w") as fh:  # from here, the peak is this command's
+        fh.write("5")
+    code = main(argv)
+    # VmHWM belongs to this program's memory map; ru_maxrss would carry the forking parent's
+    with open("/proc/self/status") as fh:
+        peak = int(re.search(r"VmHWM:\s+(\d+)", fh.read()).group(1))
+    print("\n@@ " + json.dumps([code, peak / 1024]), flush=True)
+    print("@@", file=sys.stderr, flush=True)
+"""
+
+
+@pytest.fixture
+def measured_runs() -> Callable[..., list[tuple[int, float, str]]]:
+    """Run command lines one after the other in a fresh process capped at 4 GB of address space.
+
+    Returns, for each, its exit code, the peak resident memory of that command in MB (the
+    process's VmHWM, reset before each) and its stderr.
+    """
+    import json
+    import os
+    import subprocess
+    import sys
+
+    def run(commands: list[list[str]], timeout: float = 300) -> list[tuple[int, float, str]]:
+        out = subprocess.run([sys.executable, "-c", _MEASURED, json.dumps(commands)],
+                             capture_output=True, text=True, timeout=timeout, check=False,
+                             env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+        results = [json.loads(line[3:]) for line in out.stdout.splitlines()
+                   if line.startswith("@@ ")]
+        errors = out.stderr.split("@@\n")
+        assert len(results) == len(commands), out.stderr
+        return [(code, peak, err) for (code, peak), err in zip(results, errors)]
+
+    return run

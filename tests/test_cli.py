@@ -479,7 +479,7 @@ def test_every_option_of_every_command_has_help_ending_with_its_default():
         assert "(default:[])" not in text and "==SUPPRESS==" not in text, name
     study = " ".join(_subparsers()["study"].format_help().split())
     for default in ("(default: 180s,180s)", "(default: 1-10)", "(default: 1,2)",
-                    "(default: fos,yw,cov,burg,gm)", "(default: 30)", "(default: keep)"):
+                    "(default: fos,yw,cov,burg,gm)", "(default: 30)", "(default: refuse)"):
         assert default in study
     assert "(default: 50%,20%)" in " ".join(_subparsers()["close-loop"].format_help().split())
 
@@ -526,8 +526,8 @@ def test_a_scale_list_reads_as_the_repeated_option(tmp_path, capsys, spiky_csv):
     p, _, _ = spiky_csv(with_time=False)
     notes = []
     for scale in (["--scale", "a=1/2,b=0.5"], ["--scale", "a=1/2", "--scale", "b=0.5"]):
-        code, _, err = _run(["fit", p, "--column", "a", *scale, "--out", tmp_path / "m.json"],
-                            capsys)
+        code, _, err = _run(["fit", p, "--column", "a", *scale, "--outliers", "keep",
+                             "--out", tmp_path / "m.json"], capsys)
         assert code == 0, err
         notes.append([line for line in err.splitlines() if "scaled" in line])
     assert notes[0] == notes[1] == ["fosmodel: note: scaled a by 0.5, b by 0.5"]

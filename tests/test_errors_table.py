@@ -8,9 +8,11 @@ conftest's fixtures); a row without a builder, or a builder without a row,
 fails, so that the table and the code cannot drift apart.
 """
 
+import errno
 import gzip
 import itertools
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -114,6 +116,36 @@ def _report_over_input(tmp):
             "--split", "30s,20s", "--no-levels", "--out", str(tmp)]
 
 
+def _model_edit(tmp, edit):
+    """``predict`` with a model file whose fitted state ``edit`` changes (in place)."""
+    def edited(data):
+        edit(data["fitted"])
+        return data
+    return _predict(tmp, _record(), _model(tmp, edited))
+
+
+def _twice(fitted):
+    """Repeat the terms, and each list of the fitted state that has one entry per term."""
+    for key in ("terms", "coef", "coef_se", "q", "mse_path"):
+        fitted[key] = fitted[key] * 2
+
+
+def _large_model(tmp):
+    with open(tmp / "m.json", "wb") as fh:  # sparse: its size says it all
+        fh.truncate(17 * 2**20)
+    return _predict(tmp, _record(), str(tmp / "m.json"))
+
+
+def _device_model(tmp):
+    (tmp / "m.json").symlink_to("/dev/zero")
+    return _predict(tmp, _record(), str(tmp / "m.json"))
+
+
+def _folder_in_the_report(tmp):
+    (tmp / "report" / "allan.md").mkdir(parents=True)
+    return _report("allan", tmp, _write(tmp, _record(3000)))
+
+
 def _report(command, tmp, path, *extra):
     """``study``, ``close-loop`` or ``allan`` on ``path``, with a report directory."""
     study = ["--sensor", "gyro", "--units", "deg/s"] if command == "study" else []
@@ -148,6 +180,8 @@ BUILDERS = {
     "header only": lambda tmp: _fit(tmp, "time,gx\n"),
     "non-numeric cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,abc\n"),
     "empty or NaN cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,\n"),
+    "column of booleans as a signal":
+        lambda tmp: _fit(tmp, "time,gx\n0,True\n0.01,False\n0.02,True\n"),
     "infinite cell": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,-inf\n"),
     "value too large to compute with": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,1e308\n"),
     "time repeats": lambda tmp: _fit(tmp, "time,gx\n0,1\n0.01,2\n0.01,3\n"),
@@ -157,7 +191,9 @@ BUILDERS = {
     "gap in time with `study`, `close-loop`, `allan`, `imu` or `fleet`":
         lambda tmp: _report("allan", tmp, _gappy(tmp)),
     "`--rate` disagreeing with the time column": lambda tmp: _fit(tmp, _record(), "--rate", "50"),
-    "time column in nanoseconds": lambda tmp: _fit(tmp, "time,gx\n0,1\n1e7,2\n2e7,3\n"),
+    "time column at a rate no IMU has": lambda tmp: _fit(tmp, "time,gx\n0.5,1\n2.5,2\n4.5,3\n"),
+    "time column at no rate at all": lambda tmp: _fit(tmp, "time,gx\n0,1\n1e-12,2\n2e-12,3\n"),
+    "preamble rate no IMU has": lambda tmp: _fit(tmp, "Fs,0.5\ngx\n1\n2\n3\n"),
     "one sample and no `--rate`": lambda tmp: _fit(tmp, "time,gx\n0,1\n"),
     "no time column and no `--rate`": lambda tmp: _report("allan", tmp, _write(tmp, "gx\n1\n2\n")),
     "missing or misspelt column": lambda tmp: _fit(tmp, _record(), "--column", "g_x"),
@@ -179,6 +215,10 @@ BUILDERS = {
     "constant record":
         lambda tmp: _fit(tmp, "time,gx\n" + "".join(f"{k / 100},1\n" for k in range(50))),
     "a compressed file that expands far": _bomb,
+    "a compressed line that does not end":
+        lambda tmp: _fit(tmp, gzip.compress(b"gx\n1\n" + b"0" * 20 * 2**20, 9), "--rate",
+                         "100", name="rec.csv.gz"),
+    "a header longer than 1 MiB": lambda tmp: _fit(tmp, "g" * 2**20 + "x\n1\n2\n"),
     "time that does not advance over a block": _still_time,
     "a device, FIFO or socket as the record": _device,
     "an output naming a file the command reads":
@@ -208,6 +248,16 @@ BUILDERS = {
         lambda tmp: _predict(tmp, _record(), _model(tmp, lambda d: {**d, "format_version": 99})),
     "model file of another kind":
         lambda tmp: _predict(tmp, _record(), _write(tmp, '{"rows": []}', "m.json")),
+    "model file that is a FIFO, a device or a directory": _device_model,
+    "model file over 16 MiB": _large_model,
+    "model file nested too deep":
+        lambda tmp: _predict(tmp, _record(), _write(tmp, "[" * 50 + "]" * 50, "m.json")),
+    "model file with a term outside its candidate set":
+        lambda tmp: _model_edit(tmp, lambda f: f.update(terms=["y[n-1000000000000]"])),
+    "model file with a term twice": lambda tmp: _model_edit(tmp, _twice),
+    "model file with a weight no fit gives":
+        lambda tmp: _model_edit(tmp, lambda f: f.update(coef=[1e12] * len(f["coef"]))),
+    "a folder where a file of the report goes": _folder_in_the_report,
     "output directory missing":
         lambda tmp: _fit(tmp, _record())[:-1] + [str(tmp / "none" / "m.json")],
     "output file is a directory": lambda tmp: _fit(tmp, _record())[:-1] + [str(tmp)],
@@ -234,6 +284,9 @@ FILE_BUILDERS = {
     "bursty host time without `--uniform`":
         ("bursty_csv", lambda tmp, write: ["fit", str(write()[0]), "--column", "gx", "--out",
                                            str(tmp / "m.json")]),
+    "outliers carrying over 1 % of a column's mean square":
+        ("spiky_csv", lambda tmp, write: ["fit", str(write(with_time=False)[0]), "--column", "a",
+                                          "--out", str(tmp / "m.json")]),
     "outliers dropped without a time column":
         ("spiky_csv", lambda tmp, write: ["fit", str(write(with_time=False)[0]), "--column", "a",
                                           "--outliers", "drop", "--out", str(tmp / "m.json")]),
@@ -251,11 +304,39 @@ FILE_BUILDERS = {
 }
 
 
+def _read_only(tmp, monkeypatch):
+    """A folder the process may not write: its mode, and where that does not bind (root), as
+    the system would answer."""
+    folder = tmp / "locked"
+    folder.mkdir(mode=0o555)
+    real = os.access
+    monkeypatch.setattr("fosmodel.io.output.os.access",
+                        lambda path, mode: real(path, mode) and Path(path) != folder)
+    return _fit(tmp, _record())[:-1] + [str(folder / "m.json")]
+
+
+def _full_disk(tmp, monkeypatch):
+    """The disk fills as the model is written (simulated: its fsync is refused)."""
+    def fsync(fd):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr("fosmodel.io.output.os.fsync", fsync)
+    return _fit(tmp, _record())
+
+
+# Problems the system raises, simulated where a test cannot make them (the monkeypatch fixture)
+PATCHED_BUILDERS = {
+    "output folder not writable": _read_only,
+    "disk full while writing an output": _full_disk,
+}
+
+
 def _build(problem, tmp, request):
     """The command line of ``problem``'s row, its input written into ``tmp``."""
     if problem in FILE_BUILDERS:
         fixture, build = FILE_BUILDERS[problem]
         return build(tmp, request.getfixturevalue(fixture))
+    if problem in PATCHED_BUILDERS:
+        return PATCHED_BUILDERS[problem](tmp, request.getfixturevalue("monkeypatch"))
     return BUILDERS[problem](tmp)
 
 
@@ -276,12 +357,12 @@ def test_the_readme_has_the_errors_table():
 
 
 def test_every_builder_has_a_row():
-    assert sorted({*BUILDERS, *FILE_BUILDERS} - {row[0] for row in ROWS}) == []
+    assert sorted({*BUILDERS, *FILE_BUILDERS, *PATCHED_BUILDERS} - {row[0] for row in ROWS}) == []
 
 
 @pytest.mark.parametrize("problem, shown, code", ROWS, ids=[row[0] for row in ROWS])
 def test_each_row_of_the_errors_table(problem, shown, code, tmp_path, capsys, request):
-    assert problem in {*BUILDERS, *FILE_BUILDERS}, (
+    assert problem in {*BUILDERS, *FILE_BUILDERS, *PATCHED_BUILDERS}, (
         f"no test builds the documentation's error row {problem!r}")
     argv = _build(problem, tmp_path, request)
     capsys.readouterr()  # what building printed

@@ -115,6 +115,17 @@ def test_a_failed_record_is_named_after_the_others_are_stored(files, tmp_path):
     assert again.ran == ["imu9"] and again.skipped == NAMES
 
 
+def test_a_fleet_refused_whole_leaves_no_store(tmp_path, capsys):
+    """A refused record leaves no folder and no marker; with no record stored, no store."""
+    bad = tmp_path / "imu9.csv"
+    bad.write_text("gx_dps,ax_mps2\n0.1,oops\n")
+    argv = ["fleet", str(bad), "--steps", "allan", "--out", str(tmp_path / "a" / "store")]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("fosmodel: error: record imu9: ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["imu9.csv"]
+
+
 def test_the_reports_of_a_chosen_step_on_a_chosen_axis(files, tmp_path):
     result = run_fleet(files[:1], tmp_path, FleetConfig(imu=SMALL, steps=("allan",),
                                                         columns=("gz_dps",), reports=True))

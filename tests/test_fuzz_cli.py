@@ -177,8 +177,11 @@ def _time_column(rng):
     out += [("time-one-row", "r.csv", _text(BASE[:2]), "a single sample cannot give a rate"),
             ("time-only", "r.csv", _text([line.split(",")[0] for line in BASE]),
              "only a time column"),
-            ("time-in-nanoseconds", "r.csv", _text(_with_times([v * 1e9 for v in _times(BASE)])),
-             "gives a sample rate of 1e-07 Hz")]
+            ("time-at-0.4-hz", "r.csv", _text(_with_times([v * 250 for v in _times(BASE)])),
+             "gives a sample rate of 0.4 Hz, outside the 1 Hz to 100 kHz an IMU samples at"),
+            ("time-at-a-picosecond", "r.csv", _text(_with_times([v * 1e-10 for v in
+                                                                 _times(BASE)])),
+             "gives a sample rate of 1e+12 Hz, outside 1e-06 to 1e+09 Hz")]
     return out
 
 

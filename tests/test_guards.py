@@ -1,9 +1,11 @@
 """Nothing lost, nothing silently wrong: outputs never over inputs, bounded reads, and
 refusals where a result would mean nothing."""
 
+import errno
 import gzip
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -292,4 +294,157 @@ def test_ctrl_c_on_a_running_loop(tmp_path):
         proc.send_signal(signal.SIGINT)
         err = proc.stderr.read()
         assert proc.wait(timeout=60) == 130 and "fosmodel: interrupted" in err
+        assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv"]
+
+
+# --- the operating system's refusals of an output: one line, exit 2, nothing changed ---------
+
+_LAST = {"fit": "out", "predict": "out", "study": "o.json", "close-loop": "o.json",
+         "allan": "o.json", "synth": "out.truth.json"}  # the last file each command writes
+
+
+def _failing_at(name, error):
+    """An ``os.fsync`` that raises ``error`` on the temporary file of output ``name``."""
+    real = os.fsync
+
+    def fsync(fd):
+        if os.path.basename(os.readlink(f"/proc/self/fd/{fd}")).startswith(f".{name}."):
+            raise error
+        return real(fd)
+    return fsync
+
+
+@pytest.mark.parametrize("command", sorted(_LAST))
+def test_a_full_disk_or_ctrl_c_at_the_last_output_undoes_the_first(folder, capsys, monkeypatch,
+                                                                   command):
+    """The outputs a command put in place before its last one failed are taken back: removed
+    when new, restored byte for byte when they replaced earlier ones."""
+    argv = _interrupted_commands(folder)[command]
+    fresh = _snapshot(folder)
+    full = OSError(errno.ENOSPC, "No space left on device")
+    with monkeypatch.context() as patch:
+        patch.setattr("fosmodel.io.output.os.fsync", _failing_at(_LAST[command], full))
+        assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == (f"fosmodel: error: cannot write {folder / _LAST[command]}: No space left "
+                       "on device")
+    assert _snapshot(folder) == fresh and not [p for p in folder.rglob(".*")]
+    assert cli.main(argv) == 0
+    written = _snapshot(folder)
+    assert len(written) > len(fresh)
+    with monkeypatch.context() as patch:
+        patch.setattr("fosmodel.io.output.os.fsync", _failing_at(_LAST[command],
+                                                                  KeyboardInterrupt()))
+        assert cli.main(argv) == 130
+    assert capsys.readouterr().err.strip().splitlines()[-1] == "fosmodel: interrupted"
+    assert _snapshot(folder) == written and not [p for p in folder.rglob(".*")]
+
+
+@pytest.mark.parametrize("command", ["fit", "predict", "study", "close-loop", "allan"])
+def test_a_folder_the_process_may_not_write_is_refused_before_any_work(folder, capsys,
+                                                                       monkeypatch, command):
+    """A read-only output folder was a PermissionError, an internal error, after the work."""
+    argv = _interrupted_commands(folder)[command]
+    before = _snapshot(folder)
+    monkeypatch.setattr("fosmodel.io.output.os.access", lambda path, mode: False)
+    monkeypatch.setattr("fosmodel.cli.commands.load_record",
+                        lambda *a, **k: pytest.fail("read the record"))
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("fosmodel: error: cannot write ")
+    assert err[0].endswith(f": permission denied on directory {folder}"), err
+    assert _snapshot(folder) == before
+
+
+@pytest.mark.parametrize("error, said", [
+    (PermissionError(errno.EACCES, "Permission denied"), "Permission denied"),
+    (OSError(errno.EROFS, "Read-only file system"), "Read-only file system"),
+    (IsADirectoryError(errno.EISDIR, "Is a directory"), "Is a directory"),
+])
+def test_a_write_the_system_refuses_after_the_checks_is_one_line(folder, capsys, monkeypatch,
+                                                                 error, said):
+    """The folder changed between the check and the write: the refusal names the output."""
+    before = _snapshot(folder)
+    real = os.open
+
+    def refused(path, *args, **kwargs):
+        if os.path.basename(path).startswith(".model2.json."):
+            raise error
+        return real(path, *args, **kwargs)
+    monkeypatch.setattr("fosmodel.io.output.os.open", refused)
+    argv = ["fit", str(folder / "rec.csv"), "--column", "gx", "--out", str(folder / "model2.json")]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == f"fosmodel: error: cannot write {folder / 'model2.json'}: {said}"
+    assert _snapshot(folder) == before
+
+
+def test_a_folder_named_like_a_report_file_changes_nothing(folder, capsys):
+    """It was an IsADirectoryError, an internal error, once the report's first files had moved."""
+    report = folder / "report"
+    (report / "allan.md").mkdir(parents=True)
+    (report / "noise.csv").write_text("earlier\n")
+    before = _snapshot(folder)
+    assert cli.main(["allan", str(folder / "rec.csv"), "--column", "gx", "--out",
+                     str(report)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"fosmodel: error: cannot write the report into {report}: {report}/allan.md "
+                   "is a directory, where the report has a file of that name"]
+    assert _snapshot(folder) == before and (report / "allan.md").is_dir()
+    assert not [p for p in folder.rglob(".*")]
+
+
+def _in_a_mount(tmp_path, options):
+    """A command prefix that runs in a private mount namespace with a tmpfs on ``tmp_path/mnt``
+    (``options``), then prints what the command left in it; or a skip where this process may
+    not mount."""
+    mnt = tmp_path / "mnt"
+    mnt.mkdir()
+    prefix = ["unshare", "--mount", "--propagation", "private", "sh", "-c",
+              f'mount -t tmpfs -o {options} tmpfs "$0" || exit 99; "$@"; code=$?; '
+              'echo "left:" $(ls -A "$0"); exit $code', str(mnt)]
+    if shutil.which("unshare") is None or subprocess.run(
+            [*prefix, "true"], capture_output=True, check=False).returncode != 0:
+        pytest.skip("no private mount namespace here (unshare --mount needs privileges)")
+    return prefix, mnt
+
+
+@pytest.mark.parametrize("options, said", [
+    ("size=64k", "No space left on device"),
+    ("ro", "is on a read-only file system"),
+])
+def test_a_real_full_disk_and_a_real_read_only_folder(tmp_path, options, said):
+    prefix, mnt = _in_a_mount(tmp_path, options)
+    y = lfilter([1.0], [1.0, -0.7], np.random.default_rng(6).standard_normal(5000))
+    pd.DataFrame({"time": np.arange(5000) / 100.0, "gx": y}).to_csv(tmp_path / "r.csv",
+                                                                    index=False)
+    for argv in (["allan", str(tmp_path / "r.csv"), "--column", "gx", "--out", str(mnt / "a")],
+                 ["fit", str(tmp_path / "r.csv"), "--column", "gx", "--out", str(mnt / "m.json")]):
+        out = subprocess.run([*prefix, sys.executable, "-m", "fosmodel.cli", *argv],
+                             capture_output=True, text=True, timeout=120, check=False)
+        err = out.stderr.strip().splitlines()
+        if argv[0] == "fit" and options.startswith("size"):
+            assert out.returncode == 0, out.stderr  # a model file fits in 64 kB
+            continue
+        assert out.returncode == 2 and len(err) == 1, out.stderr
+        assert err[0].startswith(f"fosmodel: error: cannot write {argv[-1]}: ") and said in err[0]
+        assert out.stdout.splitlines()[-1] == "left:"  # nothing in the mount
+
+
+def test_ctrl_c_while_the_libraries_load_is_one_line(tmp_path):
+    """Ctrl-C in the first seconds (numpy, pandas and scikit-learn loading) printed a traceback."""
+    pd.DataFrame({"time": np.arange(100) / 100.0, "gx": np.arange(100.0) % 7}).to_csv(
+        tmp_path / "r.csv", index=False)
+    argv = [sys.executable, "-X", "importtime", "-m", "fosmodel.cli", "close-loop",
+            str(tmp_path / "r.csv"), "--column", "gx", "--out", str(tmp_path / "loop")]
+    with subprocess.Popen(argv, stderr=subprocess.PIPE, text=True) as proc:
+        for line in proc.stderr:  # the command line's guard is in place once numpy loads
+            if line.split("|")[-1].strip() == "numpy":
+                break
+        proc.send_signal(signal.SIGINT)
+        err = [line for line in proc.stderr.read().splitlines()
+               if not line.startswith("import time:")]
+        assert proc.wait(timeout=60) == 130
+    assert err == ["fosmodel: interrupted"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r.csv"]

@@ -1,4 +1,5 @@
 import gzip
+import importlib.util
 
 import numpy as np
 import pandas as pd
@@ -261,7 +262,7 @@ def _bounds(x):
 
 def test_outliers_are_reported_and_kept(spiky_csv):
     p, a, b = spiky_csv(with_time=False)
-    rec = load_record(p)
+    rec = load_record(p, outliers="keep")
     assert set(rec.outliers) == {"a", "b"}
     np.testing.assert_array_equal(rec.outliers["a"], [100, 700])
     np.testing.assert_array_equal(rec.outliers["b"], [700])
@@ -269,6 +270,44 @@ def test_outliers_are_reported_and_kept(spiky_csv):
     note = next(n for n in rec.notes if n.startswith("column 'a'"))
     assert "2 outlier(s) (|x - median| > 10 x 1.4826 MAD" in note
     assert "at sample(s) 100, 700 (line(s) 102, 702); kept" in note
+
+
+def test_outliers_that_carry_the_mean_square_refuse_the_record_by_default(spiky_csv):
+    p, _, _ = spiky_csv(with_time=False)
+    with pytest.raises(InputError, match=(
+            f"^{p}: column 'a': 2 outlier\\(s\\) \\(\\|x - median\\| > 10 x 1.4826 MAD\\) at "
+            r"sample\(s\) 100, 700 \(line\(s\) 102, 702\) carry 86 % of its mean square about "
+            "its median: .* outliers='keep' \\(if they are the sensor's\\), or "
+            "outliers='clip' or 'drop'$")):
+        load_record(p)
+
+
+@pytest.mark.parametrize("mode", ["refuse", "keep", "drop"])
+def test_a_single_spike_of_a_thousand_sigma(tmp_path, mode):
+    x = np.random.default_rng(8).normal(size=20_000)
+    x[12_345] = 1e3
+    p = _write(tmp_path, {"time": np.arange(x.size) / 100, "gx": x})
+    if mode == "refuse":  # 1e6 against a mean square of 2e4: 98 % of it
+        with pytest.raises(InputError, match=r"column 'gx': 1 outlier\(s\) .* carry 98 %"):
+            load_record(p)
+        return
+    rec = load_record(p, outliers=mode)
+    assert rec.outliers["gx"].tolist() == [12_345]
+    kept = rec.column("gx")
+    if mode == "keep":
+        np.testing.assert_array_equal(kept, x)
+    else:
+        np.testing.assert_array_equal(kept, np.delete(x, 12_345))
+
+
+def test_a_few_outliers_under_the_share_are_kept_with_a_note(tmp_path):
+    x = np.random.default_rng(9).normal(size=100_000)
+    x[500] = 12.0  # 144 against a mean square of 1e5: 0.14 %
+    rec = load_record(_write(tmp_path, {"gx": x}), rate=100)
+    np.testing.assert_array_equal(rec.column("gx"), x)
+    assert rec.outliers["gx"].tolist() == [500]
+    assert any("kept: they carry 0.14 % of its mean square about its median, under the 1 %"
+               in n for n in rec.notes)
 
 
 def test_outliers_clipped_to_the_bound(spiky_csv):
@@ -303,7 +342,7 @@ def test_dropping_without_time_is_refused(tmp_path, spiky_csv):
         load_record(p, outliers="drop")
     clean = load_record(_csv(tmp_path, "a\n0.5\n1.5\n0.7\n"), outliers="drop")
     assert clean.notes == ["outliers='drop': no outliers found (|x - median| > 10 x 1.4826 MAD)"]
-    with pytest.raises(InputError, match="outliers must be one of keep, clip, drop"):
+    with pytest.raises(InputError, match="outliers must be one of refuse, keep, clip, drop"):
         load_record(p, outliers="remove")
 
 
@@ -313,7 +352,7 @@ def test_outliers_of_a_column_on_few_levels(tmp_path):
     rec = load_record(_write(tmp_path, {"temp": temp, "const": np.ones(200)}))
     assert rec.outliers == {}
     temp[50] = 27.0
-    rec = load_record(_write(tmp_path, {"temp": temp, "const": np.ones(200)}))
+    rec = load_record(_write(tmp_path, {"temp": temp, "const": np.ones(200)}), outliers="keep")
     assert set(rec.outliers) == {"temp"} and rec.outliers["temp"].tolist() == [50]
 
 
@@ -522,3 +561,80 @@ def test_a_gap_is_refused_offering_what_the_caller_can_take(tmp_path, gaps, offe
     with pytest.raises(InputError) as err:
         load_record(path, gaps=gaps)
     assert str(err.value) == message
+
+
+def test_header_names_are_read_without_the_spaces_around_them(tmp_path):
+    """``time, gx ,temp`` was refused: "no column 'gx' (did you mean 'gx '?)"."""
+    p = _csv(tmp_path, "time, gx ,temp\n0, 1.5 ,20\n0.01,2.5,20.1\n0.02,3.5,20.2\n")
+    rec = load_record(p, columns=["gx"])
+    assert rec.names == ["gx"] and rec.column("gx").tolist() == [1.5, 2.5, 3.5]
+    assert load_record(p).names == ["gx", "temp"]
+    with pytest.raises(InputError, match=r"column name 'gx' appears 2 times in the header "
+                                         r"\(columns 2, 3\)"):
+        load_record(_csv(tmp_path, "time,gx, gx \n0,1,2\n0.01,2,3\n", "twice.csv"))
+
+
+def test_booleans_are_no_signal(tmp_path):
+    """A column of True/False was modelled as a signal of ones and zeros."""
+    t = np.arange(50) / 100
+    flags = np.arange(50) % 3 == 0
+    pd.DataFrame({"time": t, "gx": np.sin(t), "ok": flags}).to_csv(tmp_path / "r.csv",
+                                                                    index=False)
+    (tmp_path / "gaps.csv").write_text("time,gx,ok\n0,1,True\n0.01,2,\n0.02,3,false\n")
+    s = np.zeros(50, dtype=[("time", float), ("gx", float), ("ok", bool)])
+    s["time"], s["gx"], s["ok"] = t, np.sin(t), flags
+    np.save(tmp_path / "r.npy", s)
+    np.save(tmp_path / "plain.npy", flags)
+    files = {"r.csv": "(True/False)", "gaps.csv": "(True/False)", "r.npy": "(True/False)",
+             "plain.npy": "(True/False)"}
+    if importlib.util.find_spec("pyarrow") is not None:
+        pd.DataFrame({"time": t, "gx": np.sin(t), "ok": flags}).to_parquet(tmp_path / "r.parquet")
+        files["r.parquet"] = "(True/False)"
+    for name in files:
+        column = "c0" if name == "plain.npy" else "ok"
+        with pytest.raises(InputError, match=rf"{name}: column '{column}' holds booleans "
+                                             r"\(True/False\), not a sensor's readings"):
+            load_record(tmp_path / name, columns=[column], rate=100)
+    assert load_record(tmp_path / "r.csv", columns=["gx"]).names == ["gx"]  # left unread
+
+
+@pytest.mark.parametrize("name, per_second, origin", [
+    ("time", 1000, 0), ("time", 1000, 1_704_067_200_000), ("timestamp", 10**6, 5_000_000),
+    ("time", 10**9, 1_704_067_200 * 10**9), ("time_ms", 1000, 0), ("t_us", 10**6, 0),
+    ("timestamp_ns", 10**9, 0),
+])
+def test_integer_timestamps_are_read_in_their_unit(tmp_path, name, per_second, origin):
+    """Integer milliseconds (a common logger format) were read as seconds: 0.1 Hz, fitted."""
+    stamps = origin + (per_second // 100) * np.arange(300, dtype=np.int64)  # 100 Hz
+    gx = np.sin(np.arange(300) / 7)
+    pd.DataFrame({name: stamps, "gx": gx}).to_csv(tmp_path / "r.csv", index=False)
+    rec = load_record(tmp_path / "r.csv")
+    assert rec.rate == pytest.approx(100.0, rel=1e-5)
+    np.testing.assert_allclose(rec.time - rec.time[0], np.arange(300) / 100, atol=1e-6)
+    unit = {1000: "milliseconds", 10**6: "microseconds", 10**9: "nanoseconds"}[per_second]
+    assert any(note.startswith(f"column {name!r} read in {unit} (") for note in rec.notes)
+    scaled = load_record(tmp_path / "r.csv", scale={name: 1 / per_second})  # the user's word
+    assert scaled.rate == pytest.approx(100.0, rel=1e-5)
+    assert not any("read in" in note for note in scaled.notes)
+
+
+def test_a_rate_no_imu_has_is_refused_unless_given(tmp_path):
+    p = _csv(tmp_path, "time,gx\n" + "".join(f"{2.5 * k},{k % 3}\n" for k in range(20)))
+    with pytest.raises(InputError, match=r"column 'time' gives a sample rate of 0.4 Hz, outside "
+                                         r"the 1 Hz to 100 kHz an IMU samples at; if that is the "
+                                         r"record's rate, confirm it with rate=0.4"):
+        load_record(p)
+    assert load_record(p, rate=0.4).rate == 0.4
+    q = _csv(tmp_path, "Fs,200000\ngx\n1\n2\n3\n", "fast.csv")
+    with pytest.raises(InputError, match=r"the preamble's Fs,200000 \(line 1\) gives a sample "
+                                         r"rate of 200000 Hz, outside"):
+        load_record(q)
+    assert load_record(q, rate=2e5).rate == 2e5
+    assert load_record(_csv(tmp_path, "gx\n1\n2\n", "none.csv"), rate=0.01).rate == 0.01
+
+
+def test_a_second_time_column_is_left_unread(tmp_path):
+    p = _csv(tmp_path, "time,timestamp_ns,gx\n0,5,1\n0.01,10000005,2\n0.02,20000005,3\n")
+    rec = load_record(p)
+    assert rec.names == ["gx"] and rec.rate == pytest.approx(100)
+    assert "column 'timestamp_ns' is another time column: the time is 'time'" in rec.notes[0]

@@ -33,7 +33,8 @@ def _on_grid(x, step):
 @pytest.fixture(scope="module", params=[f"imu{i}" for i in range(1, 7)])
 def adis(request):
     """Each ADIS16405 session, loaded once for the module (a few seconds each)."""
-    return request.param, load_record(DATA / "adis16405" / f"{request.param}.csv.gz", rate=100)
+    return request.param, load_record(DATA / "adis16405" / f"{request.param}.csv.gz", rate=100,
+                                          outliers="keep")
 
 
 def test_adis16405_sessions(adis):
@@ -114,7 +115,9 @@ def test_mpu6050_tomisuarez2():
 
 def test_mtig_contaminated():
     path = DATA / "mtig_contaminated" / "gyro_x.csv.gz"
-    rec = load_record(path, rate=100)
+    with pytest.raises(InputError, match=r"column 'gyro_x': 1954 outlier\(s\) .* carry 17 %"):
+        load_record(path, rate=100)  # by default: they carry too much to be kept unsaid
+    rec = load_record(path, rate=100, outliers="keep")
     assert rec.n_samples == 500_000 and rec.rate == 100.0 and rec.names == ["gyro_x"]
     flagged = rec.outliers["gyro_x"]
     assert 1_000 < flagged.size < 5_000  # 1,954 with k = 10

@@ -1,61 +1,41 @@
 """Command line: ``fosmodel fit | predict | study | close-loop | allan | synth | demo``.
 
 A thin layer over the library: :mod:`.parser` holds the grammar, :mod:`.commands` one
-short function per command over public library functions, and :func:`main` the exit codes:
-0 success, 2 bad input or usage (one-line message on stderr), 1 internal error (with a
+short function per command over public library functions, and :mod:`.exit_codes` the exit
+codes: 0 success, 2 bad input or usage (one-line message on stderr), 1 internal error (with a
 hint to report it; ``--verbose`` shows the traceback), 130 interrupted.
+
+This module imports nothing heavy: :func:`main` imports the rest inside its guard, so that
+Ctrl-C while numpy, pandas and scikit-learn load ends the command as it does later, in one
+line and code 130, never with a traceback.
 """
 
 from __future__ import annotations
 
-import argparse
-import logging
 import sys
-import traceback
-import warnings
+from typing import TYPE_CHECKING
 
-from ..core.exceptions import InputError
-from .flags import with_flags
-from .parser import build_parser
+if TYPE_CHECKING:
+    from .parser import build_parser
 
 __all__ = ["build_parser", "main"]
 
 
-def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
-                      lineno: int, line: str | None = None) -> str:
-    """Format a warning as the command line shows it: one line, like its notes and errors."""
-    return f"fosmodel: warning: {' '.join(with_flags(str(message)).split())}\n"
-
-
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    shown, warnings.formatwarning = warnings.formatwarning, _one_line_warning
     try:
-        return _run(args)
-    finally:
-        warnings.formatwarning = shown
+        from .exit_codes import run
 
-
-def _run(args: argparse.Namespace) -> int:
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="fosmodel: %(message)s", stream=sys.stderr)
-    try:
-        return args.func(args)
-    except InputError as exc:
-        from ..io.sensor_log import TopicError  # here: a command's modules, not the parser's
-
-        message = with_flags(exc.with_flag() if isinstance(exc, TopicError) else str(exc))
-        print(f"fosmodel: error: {' '.join(message.split())}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
+        return run(argv)
+    except KeyboardInterrupt:  # while importing, or between the command and its exit code
         print("fosmodel: interrupted", file=sys.stderr)
         return 130
-    except Exception as exc:  # a bug: say so, briefly, and how to get details
-        if args.verbose:
-            traceback.print_exc()
-        print(f"fosmodel: internal error: {type(exc).__name__}: {' '.join(str(exc).split())} "
-              "(this is a bug; please report it with the command you ran; "
-              "--verbose shows the traceback)", file=sys.stderr)
-        return 1
+
+
+def __getattr__(name: str) -> object:
+    """Import :func:`build_parser` on first use."""
+    if name != "build_parser":
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from .parser import build_parser
+
+    return build_parser

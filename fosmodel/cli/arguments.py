@@ -11,7 +11,7 @@ import argparse
 import numpy as np
 
 from ..io.formats import FORMATS, described
-from ..io.outliers import OUTLIER_K, OUTLIER_MODES
+from ..io.outliers import DEFAULT_OUTLIERS, OUTLIER_K, OUTLIER_MODES, OUTLIER_SHARE
 from .parsing import Refused
 
 #: What a record argument may be.
@@ -104,9 +104,11 @@ def add_loader_options(parser: argparse.ArgumentParser, contiguous: str | None =
     parser.add_argument("--uniform", action="store_true",
                         help="take the samples as uniformly spaced at the time column's "
                              "effective rate (a host's bursty receive time)")
-    parser.add_argument("--outliers", choices=OUTLIER_MODES, default="keep",
-                        help=f"outliers (|x - median| > {OUTLIER_K:g} x 1.4826 MAD): keep (and "
-                             "report), clip or drop")
+    parser.add_argument("--outliers", choices=OUTLIER_MODES, default=DEFAULT_OUTLIERS,
+                        help=f"outliers (|x - median| > {OUTLIER_K:g} x 1.4826 MAD): refuse the "
+                             f"record if a column's carry over {100 * OUTLIER_SHARE:g} %% of its "
+                             "mean square (else keep them), keep, clip or drop them; all are "
+                             "reported")
     gaps = parser.add_mutually_exclusive_group()
     gaps.add_argument("--fill", dest="gaps", action="store_const", const="fill",
                       help="fill gaps of the time column by linear interpolation")

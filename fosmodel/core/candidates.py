@@ -97,13 +97,21 @@ class Term:
         return self.name
 
     @classmethod
-    def parse(cls, name: str) -> Term:
+    def parse(cls, name: str, max_degree: int | None = None) -> Term:
         """Parse a term name written by :attr:`name`.
+
+        Parameters
+        ----------
+        name : str
+        max_degree : int, optional
+            Refuse a product of more factors, before building it: a name read from a file
+            (``y[n-1]^1000000000``) must not make a list that long.
 
         Raises
         ------
         InputError
-            If ``name`` is not a valid term name.
+            If ``name`` is not a valid term name, or a product of more than ``max_degree``
+            factors.
         """
         text = name.strip()
         if text == "1":
@@ -128,6 +136,9 @@ class Term:
                 factor = (token, None)
             else:
                 raise InputError(f"cannot parse term {name!r} (bad factor {token!r})")
+            if max_degree is not None and len(factors) + power > max_degree:
+                raise InputError(f"term {name!r} is a product of more than {max_degree} "
+                                 "factor(s)")
             factors.extend([factor] * power)
         return cls(tuple(factors))
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import itertools
+import io
 import lzma
 import re
 import warnings
@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from ..core.exceptions import InputError, error_line
-from .compression import OPENERS, capped_source
+from .compression import HEAD_BYTES, MAX_LINE, capped_source, head, head_lines
 from .timebase import RATE_RANGE, RATE_TOLERANCE
 from .values import number_or_ratio
 
@@ -41,7 +41,10 @@ class Preamble(NamedTuple):
 
 
 def read_header(path: Path) -> tuple[list[str], int, Preamble]:
-    """Column names, the file line of the first data row, the preamble."""
+    """Column names, the file line of the first data row, the preamble.
+
+    The names are stripped of the spaces around them (``time, gx ,temp``).
+    """
     preamble = _find_preamble(path)
     return _csv_names(path, preamble.header_index), preamble.header_index + 2, preamble
 
@@ -49,7 +52,7 @@ def read_header(path: Path) -> tuple[list[str], int, Preamble]:
 def read_blocks(path: Path, skip: int, names: list[str], keep: list[str] | None,
                 chunk_rows: int) -> tuple[Iterator[pd.DataFrame], None]:
     """Yield the kept columns, ``chunk_rows`` rows at a time (the row count is not known)."""
-    return _csv_blocks(path, skip, keep, chunk_rows), None
+    return _csv_blocks(path, skip, names, keep, chunk_rows), None
 
 
 def preamble_rate(
@@ -104,10 +107,8 @@ def _find_preamble(path: Path) -> Preamble:
 
 
 def _head_lines(path: Path, n: int) -> list[str]:
-    opener = OPENERS.get(path.suffix.lower(), open)
     try:
-        with opener(path, "rt", errors="replace", newline="") as fh:
-            return list(itertools.islice(fh, n))
+        return head_lines(path, n)
     except (OSError, EOFError, lzma.LZMAError):  # a damaged file: pandas says what is wrong
         return []
 
@@ -132,24 +133,34 @@ _CSV_OPTIONS = {"sep": ",", "skipinitialspace": True}
 
 
 def _csv_names(path: Path, skip: int) -> list[str]:
-    """Return the header on line ``skip + 1``, as written (pandas would rename a repeated name)."""
+    """Return the header on line ``skip + 1``, each name stripped of the spaces around it.
+
+    Read from the file's head (:func:`~fosmodel.io.compression.head`), never further: a header
+    longer than ``HEAD_BYTES`` is refused.  pandas would rename a repeated name; here it is
+    refused, once stripped.
+    """
     import pandas as pd  # here: loaded by the first record read, not by the parser
 
     try:
-        names = pd.read_csv(path, header=None, nrows=1, dtype=str, keep_default_na=False,
-                            skiprows=skip, **_CSV_OPTIONS).iloc[0].tolist()
+        text = head(path, skip + 1)
+        if len(text) >= HEAD_BYTES and not text.endswith((b"\n", b"\r")):
+            raise InputError(f"{path}: line {skip + 1}, the header, is longer than "
+                             f"{HEAD_BYTES // 2**20} MiB: not a record's header")
+        names = pd.read_csv(io.BytesIO(text), header=None, nrows=1, dtype=str,
+                            keep_default_na=False, skiprows=skip, **_CSV_OPTIONS).iloc[0].tolist()
     except Exception as exc:  # noqa: BLE001 - one message for every way a read can fail
         raise _csv_error(path, skip, exc) from None
+    names = [str(n).strip() for n in names]
     _check_header(path, skip, names)
-    unnamed = [i for i, n in enumerate(names) if not str(n).strip()]
+    unnamed = [i for i, n in enumerate(names) if not n]
     if unnamed:
         raise InputError(f"{path}: column {unnamed[0] + 1} has no name")
-    return [str(n) for n in names]
+    return names
 
 
-def _csv_blocks(path: Path, skip: int, keep: list[str] | None,
+def _csv_blocks(path: Path, skip: int, names: list[str], keep: list[str] | None,
                 chunk_rows: int) -> Iterator[pd.DataFrame]:
-    """Yield the rows under the header, in blocks.
+    """Yield the rows under the header, in blocks, their columns under ``names``.
 
     ``index_col=False``: a first data row longer than the header is an error,
     never a silent shift of the columns onto an index.  Every field is parsed
@@ -164,7 +175,8 @@ def _csv_blocks(path: Path, skip: int, keep: list[str] | None,
         with warnings.catch_warnings(), capped_source(path) as source:
             warnings.simplefilter("error", pd.errors.ParserWarning)
             with pd.read_csv(source, low_memory=False, index_col=False, skiprows=skip,
-                             chunksize=chunk_rows, **_CSV_OPTIONS) as reader:
+                             header=0, names=names, chunksize=chunk_rows,
+                             **_CSV_OPTIONS) as reader:
                 first_line = skip + 2
                 for block in reader:
                     if keep is not None:
@@ -222,10 +234,16 @@ def _check_header(path: Path, skip: int, names: list[str]) -> None:
 
 
 def _non_utf8_line(path: Path) -> str:
-    """``"line N: "`` for the first line of ``path`` that is not UTF-8 text, if it can be read."""
-    with contextlib.suppress(OSError, EOFError, lzma.LZMAError):  # damaged: no line to name
-        with OPENERS.get(path.suffix.lower(), open)(path, "rb") as fh:
-            for number, line in enumerate(fh, 1):
+    """``"line N: "`` for the first line of ``path`` that is not UTF-8 text, if it can be read.
+
+    Read as the rows are, bounded (a line a decompressor makes endless ends the search).
+    """
+    with contextlib.suppress(OSError, EOFError, lzma.LZMAError, InputError), \
+            capped_source(path) as source:  # damaged or bounded: no line to name
+        stream = (open(source, "rb") if isinstance(source, Path)  # noqa: SIM115 - closed below
+                  else io.BufferedReader(source))
+        with stream:
+            for number, line in enumerate(iter(lambda: stream.readline(MAX_LINE), b""), 1):
                 try:
                     line.decode("utf-8")
                 except UnicodeDecodeError:

@@ -12,8 +12,9 @@ CSV
     Optional ``key,value`` preamble lines (``Fs,100`` gives the sample rate),
     one header row of column names, comma-separated, then one row per sample;
     gzip, bz2 or xz compressed when the name ends so.  An optional time column
-    (``time``, ``time_s`` or ``t_s``, in seconds) gives the sample rate;
-    otherwise pass ``rate``.
+    (``time``, ``time_s``, ``t_s`` or ``timestamp``, in seconds or, of integers, in the unit
+    :func:`fosmodel.io.time_units.time_unit` tells; ``time_ms``, ``t_us``, ``timestamp_ns``
+    in the unit they name) gives the sample rate; otherwise pass ``rate``.
 ``.npy``
     A structured array (its field names are the columns), a 1-D array (one
     column ``c0``) or a 2-D array (columns ``c0``, ``c1``, ...).
@@ -49,10 +50,19 @@ from ..core.exceptions import InputError
 from ..core.validation import did_you_mean
 from .csv_reader import Preamble, preamble_rate
 from .formats import table_format
-from .outliers import OUTLIER_MODES, find_outliers, handle_outliers
+from .outliers import DEFAULT_OUTLIERS, OUTLIER_MODES, find_outliers, handle_outliers
 from .record import Record
 from .sensor_log import SensorLog
-from .timebase import GAP_MODES, RATE_RANGE, REFUSING, TIME_COLUMNS, handle_gaps, time_base
+from .time_units import time_unit
+from .timebase import (
+    GAP_MODES,
+    RATE_RANGE,
+    REFUSING,
+    TIME_COLUMNS,
+    check_imu_rate,
+    handle_gaps,
+    time_base,
+)
 from .topics import FORMATS, TopicError, is_sensor_log, read_topic
 from .values import (
     Block,
@@ -74,7 +84,7 @@ def load_record(
     rate: float | None = None,
     scale: Mapping[str, float] | None = None,
     uniform: bool = False,
-    outliers: str = "keep",
+    outliers: str = DEFAULT_OUTLIERS,
     gaps: str = "refuse",
     topic: str | None = None,
     temperature_topic: str | None = None,
@@ -97,7 +107,8 @@ def load_record(
         file's width.  A name the file lacks is an error.
     rate : float, optional
         Sample rate in Hz.  Required when the file has neither a time column
-        nor a preamble rate; checked against them when it has.
+        nor a preamble rate; checked against them when it has.  A rate the file gives
+        outside ``IMU_RATES`` (1 Hz to 100 kHz) is refused unless ``rate`` confirms it.
     scale : mapping of str to float, optional
         Factor per column, e.g. ``{"gx": 1 / 131}`` to turn raw counts into
         deg/s (the time column may be scaled too, e.g. from ms to s).
@@ -106,11 +117,13 @@ def load_record(
         rate (N - 1 intervals over its span), as a host's bursty receive time
         needs; the time gap check is then skipped and ``Record.time`` becomes
         sample number / rate.
-    outliers : {"keep", "clip", "drop"}, default "keep"
+    outliers : {"refuse", "keep", "clip", "drop"}, default "refuse"
         What to do with samples farther than ``OUTLIER_K`` robust standard
-        deviations (1.4826 MAD) from their column's median: report them only,
-        clip them to that bound, or drop their rows (only from a record with a
-        time column).  They are reported in ``Record.notes`` and ``Record.outliers``.
+        deviations (1.4826 MAD) from their column's median: refuse the record when a
+        column's carry more than ``OUTLIER_SHARE`` (1 %) of its mean square about its
+        median and keep them otherwise (:mod:`fosmodel.io.outliers` says why), report
+        them only, clip them to that bound, or drop their rows (only from a record with
+        a time column).  They are reported in ``Record.notes`` and ``Record.outliers``.
     gaps : {"refuse", "contiguous", "fill", "segments"}, default "refuse"
         What to do with gaps in a regular time column (intervals over 1.5 times
         the median one): refuse the record, fill them by linear interpolation
@@ -170,8 +183,17 @@ def load_record(
     check_magnitude(data, scale or {}, src, first_line)
     time_name = next((c for c in TIME_COLUMNS if c in data), "")
     time = data.pop(time_name) if time_name else None
+    for other in [c for c in TIME_COLUMNS if c in data]:  # one time base: the first
+        del data[other]
+        notes.append(f"column {other!r} is another time column: the time is {time_name!r}; "
+                     f"{other!r} is not read")
     if not data:
         raise InputError(f"{src}: only a time column, no data columns")
+    if time is not None and time_name not in (scale or {}):
+        unit = time_unit(time_name, time, rate)
+        if unit.unit != "s":
+            time = time * unit.seconds
+            notes.append(unit.note(time_name))
     units = {name: unit for name, unit in (log.units if log else {}).items()
              if name in data and name not in (scale or {})}
     note_integer_columns(data, [*(scale or {}), *units], notes)
@@ -181,8 +203,11 @@ def load_record(
                                 notes, gaps)
         if gaps not in REFUSING and not uniform:
             time, segments = handle_gaps(data, time, gaps, src, time_name, first_line, notes)
-    elif uniform:
-        notes.append("uniform=True has no effect: the record has no time column")
+    else:
+        if rate is not None:
+            check_imu_rate(rate, given_by, f"{given_by} gives", src)
+        if uniform:
+            notes.append("uniform=True has no effect: the record has no time column")
     found = find_outliers(data)
     record = Record(src, data, float(rate) if rate is not None else None, time, notes,
                     log.metadata if log else metadata,

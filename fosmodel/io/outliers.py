@@ -1,8 +1,21 @@
-"""Outliers of a record's columns: found per column, then kept, clipped or dropped.
+"""Outliers of a record's columns: found per column, then refused, kept, clipped or dropped.
 
 An outlier is farther than ``OUTLIER_K`` robust standard deviations from its column's
 median (:func:`find_outliers`); ``OUTLIER_MODES`` say what becomes of them
 (:func:`handle_outliers`), and every one is reported in the record's notes.
+
+The default, ``"refuse"``, refuses a record when a column's outliers carry more than
+``OUTLIER_SHARE`` (1 %) of its mean square about its median, and keeps them (noted) when
+they carry less.  A sensor record's error model and noise terms are second moments: the
+variance a fit explains, the Allan deviation at short averaging times, the white-noise
+level.  Outliers that carry 1 % of the mean square move those by as much (a single spike of
+1000 robust sigmas does so in any record under 100 million samples), and the user, not the
+loader, knows whether they are the sensor's (``keep``), a glitch to bound (``clip``) or
+samples to remove (``drop``).  Fewer cannot move the results beyond their own uncertainty:
+refusing them would refuse clean records (a 13-sigma sample or six in a million).  Only
+spikes count towards the share: runs of at most ``SPIKE_RUN`` outlying samples.  A longer
+run is an event of the record (the sensor moved, a step, a shock), which the checks that
+need a static record and the residual loop's effects name for what it is; it is noted.
 """
 
 from __future__ import annotations
@@ -16,18 +29,38 @@ from ..core.median import median
 from .positions import positions
 from .record import Record
 
-OUTLIER_MODES = ("keep", "clip", "drop")
+OUTLIER_MODES = ("refuse", "keep", "clip", "drop")
+#: What becomes of outliers unless the user says.
+DEFAULT_OUTLIERS = "refuse"
 #: An outlier is farther than ``OUTLIER_K`` robust standard deviations from the column median.
 OUTLIER_K = 10.0
+#: "refuse" refuses the outliers of a column that carry more than this share of its mean
+#: square about its median.
+OUTLIER_SHARE = 0.01
+#: The longest run of consecutive outlying samples that counts as a spike (a glitch).
+SPIKE_RUN = 3
 _MAD_TO_SIGMA = 1.4826
 
 
 class Outliers(NamedTuple):
-    """A column's outliers: their sample numbers, and the bounds outside which they lie."""
+    """A column's outliers: where they are, the bounds they lie outside, their share.
+
+    ``share`` is the share of the column's mean square about its median that its spikes
+    (runs of at most ``SPIKE_RUN`` samples) carry.
+    """
 
     samples: np.ndarray
     low: float
     high: float
+    share: float
+    spikes: np.ndarray
+
+
+def _in_spikes(index: np.ndarray) -> np.ndarray:
+    """Mark the sorted sample indices that lie in runs of at most ``SPIKE_RUN`` in a row."""
+    starts = np.flatnonzero(np.diff(index, prepend=index[0] - 2) != 1)
+    lengths = np.diff(starts, append=index.size)
+    return np.repeat(lengths <= SPIKE_RUN, lengths)
 
 
 def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
@@ -49,30 +82,61 @@ def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
             sigma = float(steps.min()) if steps.size else 0.0
         index = np.flatnonzero(deviation > OUTLIER_K * sigma)
         if sigma > 0 and index.size:
-            found[name] = Outliers(index, center - OUTLIER_K * sigma, center + OUTLIER_K * sigma)
+            spikes = index[_in_spikes(index)]
+            share = float(deviation[spikes] @ deviation[spikes]) / float(deviation @ deviation)
+            found[name] = Outliers(index, center - OUTLIER_K * sigma, center + OUTLIER_K * sigma,
+                                   share, spikes)
     return found
 
 
 def handle_outliers(record: Record, found: dict[str, Outliers], mode: str,
                      first_line: int) -> None:
-    """Note each column's outliers in the record, and keep, clip or drop them (``mode``)."""
+    """Note each column's outliers in the record; refuse, keep, clip or drop them (``mode``).
+
+    Raises
+    ------
+    InputError
+        ``mode`` "refuse" and a column whose outliers carry more than ``OUTLIER_SHARE`` of its
+        mean square about its median; "drop" from a record without a time column.
+    """
     rule = f"|x - median| > {OUTLIER_K:g} x 1.4826 MAD"
     if not found:
-        if mode != "keep":
+        if mode not in ("keep", "refuse"):
             record.notes.append(f"outliers={mode!r}: no outliers found ({rule})")
         return
-    done = {"keep": "kept (outliers='clip' or 'drop' handles them)", "clip": "clipped to",
-            "drop": "dropped"}[mode]
+    if mode == "refuse":
+        _refuse(record, found, rule, first_line)
     for name, out in found.items():
         bounds = f"[{out.low:.6g}, {out.high:.6g}]"
+        done = {"keep": "kept (outliers='clip' or 'drop' handles them)",
+                "refuse": (f"kept: they carry {_percent(out.share)} of its mean square about its "
+                           f"median, under the {_percent(OUTLIER_SHARE)} at which the record is "
+                           "refused (outliers='keep' or 'clip' or 'drop' says otherwise)"),
+                "clip": f"clipped to {bounds}", "drop": "dropped"}[mode]
         record.notes.append(
             f"column {name!r}: {out.samples.size} outlier(s) ({rule}, outside {bounds}) at "
-            f"{positions(out.samples, first_line)}; "
-            f"{done}{' ' + bounds if mode == 'clip' else ''}")
+            f"{positions(out.samples, first_line)}; {done}")
         if mode == "clip":
             record.data[name] = np.clip(record.data[name], out.low, out.high)
     if mode == "drop":
         _drop_rows(record, np.unique(np.concatenate([o.samples for o in found.values()])))
+
+
+def _refuse(record: Record, found: dict[str, Outliers], rule: str, first_line: int) -> None:
+    """Refuse the record if a column's outliers carry over ``OUTLIER_SHARE`` of its mean square."""
+    name, out = max(found.items(), key=lambda item: item[1].share)
+    if out.share <= OUTLIER_SHARE:
+        return
+    raise InputError(
+        f"{record.source}: column {name!r}: {out.spikes.size} outlier(s) ({rule}) at "
+        f"{positions(out.spikes, first_line)} carry {_percent(out.share)} of its mean square "
+        f"about its median: the fit's error, the variance and the Allan deviation would move "
+        f"as much; say what they are with outliers='keep' (if they are the sensor's), or "
+        f"outliers='clip' or 'drop'")
+
+
+def _percent(share: float) -> str:
+    return f"{100 * share:.2g} %"
 
 
 def _drop_rows(record: Record, rows: np.ndarray) -> None:

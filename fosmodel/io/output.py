@@ -8,9 +8,13 @@ directory is written beside its destination and moved into place in one step
 (:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
 that no output names a file the command reads, however the two are spelt.
 :func:`writable_file` and :func:`writable_directory` check an output's path before anything
-is read.  :func:`write_tables` and :func:`save_figure` write a table (Markdown, CSV,
-LaTeX with booktabs rules, a caption and a label) and a figure (a 300 dpi PNG and an SVG, tick
-labels that read: :mod:`fosmodel.io.figures`) that way.
+is read, and that its directory can be written.  An operating system's refusal to write (a
+read-only folder, a full disk, a directory where a file goes) is an :class:`InputError`
+naming the output, its temporary files removed; the command line publishes a command's
+outputs all or none (:mod:`fosmodel.io.journal`).  :func:`write_tables` and
+:func:`save_figure` write a table (Markdown, CSV, LaTeX with booktabs rules, a caption and a
+label) and a figure (a 300 dpi PNG and an SVG, plain tick labels on a log axis of less than
+two decades) that way.
 """
 
 from __future__ import annotations
@@ -19,15 +23,16 @@ import contextlib
 import os
 import re
 import shutil
+import uuid
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import IO, TYPE_CHECKING
 
-from ..core.exceptions import InputError
-from ..core.files import atomic_write, remove_path, stale_temporaries, temporary_path, write_text
+from ..core.exceptions import InputError, error_line
 from ..typeset.latex import table_label
 from ..typeset.markdown import markdown_table
 from ..typeset.tables import latex_table
+from . import journal
 from .figures import log_problems, tidy
 
 if TYPE_CHECKING:
@@ -81,13 +86,14 @@ def writable_file(path: str | os.PathLike[str]) -> Path:
     Raises
     ------
     InputError
-        If its directory does not exist, or it is a directory.
+        If its directory does not exist or cannot be written, or it is a directory.
     """
     out = Path(path)
     if not out.parent.is_dir():
         raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
     if out.is_dir():
         raise InputError(f"cannot write {out}: it is a directory")
+    _check_writable(out, out.parent)
     return out
 
 
@@ -97,12 +103,137 @@ def writable_directory(path: str | os.PathLike[str]) -> Path:
     Raises
     ------
     InputError
-        If it is a file.
+        If it is a file, or it (or the folder it is to be made in) cannot be written.
     """
     out = Path(path)
     if out.exists() and not out.is_dir():
         raise InputError(f"cannot write a report into {out}: it is a file, not a directory")
+    base = out
+    while not base.is_dir():  # itself, or where it will be made
+        base = base.parent
+    _check_writable(out, base)
     return out
+
+
+def _check_writable(out: Path, directory: Path) -> None:
+    """Refuse an output whose ``directory`` the process may not write (or enter)."""
+    if os.access(directory, os.W_OK | os.X_OK):
+        return
+    with contextlib.suppress(OSError):
+        if os.statvfs(directory).f_flag & os.ST_RDONLY:
+            raise InputError(f"cannot write {out}: {directory} is on a read-only file system")
+    raise InputError(f"cannot write {out}: permission denied on directory {directory}")
+
+
+class OutputError(InputError):
+    """The operating system refused to write an output: ``cannot write PATH: REASON``."""
+
+    def __init__(self, path: Path, reason: str) -> None:
+        super().__init__(f"cannot write {path}: {reason}")
+        self.path, self.reason = path, reason
+
+
+def _cannot_write(path: Path, exc: OSError, staging: Path | None = None) -> OutputError:
+    """Return the one-line error of the system's refusal to write ``path``.
+
+    A file of a report staged in ``staging`` is named in the reason, by its place in it.
+    """
+    reason = exc.strerror or error_line(exc)
+    name = Path(exc.filename) if isinstance(exc.filename, str) else None
+    if staging is not None and name is not None and name.is_relative_to(staging) \
+            and name != staging:
+        reason += f" ({name.relative_to(staging)})"
+    return OutputError(path, reason)
+
+
+def _temporary_name(path: Path, suffix: str) -> Path:
+    return path.parent / f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}{suffix}"
+
+
+def _stale(path: Path, suffix: str) -> Iterator[Path]:
+    """Temporary files or directories for ``path`` whose writer is no longer running."""
+    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(\d+)\.[0-9a-f]{{12}}{re.escape(suffix)}$")
+    with contextlib.suppress(OSError):
+        for item in path.parent.iterdir():
+            m = pattern.match(item.name)
+            if m and not _alive(int(m.group(1))):
+                yield item
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def _remove(item: Path) -> None:
+    if item.is_dir() and not item.is_symlink():
+        shutil.rmtree(item, ignore_errors=True)
+    else:
+        with contextlib.suppress(FileNotFoundError):
+            item.unlink()
+
+
+@contextlib.contextmanager
+def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
+    """Open a temporary file beside ``path``; rename it onto ``path`` on success.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination.  Its directory must exist.
+    mode : {"w", "wb"}
+        Text or binary mode.
+
+    Yields
+    ------
+    file object
+        Write the content to it.  If the body raises, the temporary file is
+        removed and ``path`` is left untouched.
+    """
+    if mode not in ("w", "wb"):
+        raise ValueError(f"mode must be 'w' or 'wb', not {mode!r}")
+    path = Path(path)
+    for item in [*_stale(path, ".tmp"), *_stale(path, journal.KEPT)]:  # of a killed run
+        _remove(item)
+    tmp = _temporary_name(path, ".tmp")
+    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
+    except OSError as exc:
+        raise _cannot_write(path, exc) from None
+    try:
+        fh = (os.fdopen(fd, "w", encoding="utf-8", newline="") if mode == "w"
+              else os.fdopen(fd, "wb"))
+        with fh:
+            yield fh
+            fh.flush()
+            os.fsync(fh.fileno())
+        journal.replace(tmp, path)
+    except BaseException as exc:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        if isinstance(exc, OSError):  # the disk full, a directory where the file goes, ...
+            raise _cannot_write(path, exc) from None
+        raise
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` atomically (UTF-8)."""
+    with atomic_write(path, "w") as fh:
+        fh.write(text)
+
+
+def _mode() -> int:
+    """Return the permission bits of a new file under the process's umask (0666 & ~umask)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
 
 
 @contextlib.contextmanager
@@ -121,29 +252,45 @@ def report_directory(out: str | os.PathLike[str],
     while not base.is_dir():  # beside out, or in its nearest existing ancestor
         base = base.parent
     target = base / out.name
-    for item in stale_temporaries(target, ".tmpdir"):
-        remove_path(item)
-    tmp = temporary_path(target, ".tmpdir")
-    tmp.mkdir()
+    for item in _stale(target, ".tmpdir"):
+        _remove(item)
+    tmp = _temporary_name(target, ".tmpdir")
+    try:
+        tmp.mkdir()
+    except OSError as exc:
+        raise _cannot_write(out, exc) from None
     try:
         yield tmp
         publish(tmp, out, protected)
+    except OutputError as exc:  # a file of the report: named by its place in the report
+        if not exc.path.is_relative_to(tmp):
+            raise
+        raise OutputError(out, f"{exc.reason} ({exc.path.relative_to(tmp)})") from None
+    except OSError as exc:
+        raise _cannot_write(out, exc, tmp) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
 def publish(tmp: Path, out: Path, protected: Iterable[str | os.PathLike[str]] = ()) -> None:
-    """Move the files of ``tmp`` onto ``out``, after checking none replaces a ``protected`` file.
+    """Move the files of ``tmp`` onto ``out``, after checking that each can take its place.
 
-    A file that would is named in an InputError, and nothing is moved.
+    A file that would replace a ``protected`` file, or a directory, and a folder that would
+    replace a file, are named in an InputError, and nothing is moved.
     """
     protected = list(protected)
     for item in tmp.rglob("*"):
         target = out / item.relative_to(tmp)
+        if not target.exists():
+            continue
         for source in protected:
-            if target.exists() and same_file(target, source):
+            if same_file(target, source):
                 raise InputError(f"writing the report into {out} would replace {source}, a "
                                  "file this command reads; choose another output directory")
+        if item.is_dir() != target.is_dir():
+            raise InputError(f"cannot write the report into {out}: {target} is "
+                             f"{'a file' if item.is_dir() else 'a directory'}, where the report "
+                             f"has {'a folder' if item.is_dir() else 'a file'} of that name")
     _move(tmp, out)
 
 
@@ -154,10 +301,13 @@ def _move(tmp: Path, out: Path) -> None:
             if item.is_dir() and target.is_dir():
                 _move(item, target)
             else:
-                os.replace(item, target)
+                journal.replace(item, target)
     else:
+        missing = [d for d in reversed(out.parents) if not d.exists()]
         out.parent.mkdir(parents=True, exist_ok=True)
-        os.replace(tmp, out)
+        for folder in missing:
+            journal.created(folder)
+        journal.replace(tmp, out)
 
 
 def path_name(name: str) -> str:

@@ -14,8 +14,11 @@ import numpy as np
 from ..core.exceptions import InputError
 from ..core.median import median
 from .positions import where
+from .time_units import IMU_RATES, TIME_COLUMNS, is_imu_rate
 
-TIME_COLUMNS = ("time", "time_s", "t_s")
+__all__ = ["GAP_MODES", "IMU_RATES", "RATE_RANGE", "REFUSING", "STILL_ROWS", "TIME_COLUMNS",
+           "check_imu_rate", "check_order", "handle_gaps", "time_base"]
+
 GAP_MODES = ("refuse", "contiguous", "fill", "segments")
 REFUSING = ("refuse", "contiguous")  # the gap modes that refuse a record with gaps
 RATE_TOLERANCE = 0.01
@@ -32,7 +35,8 @@ def time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool
     """Return the rate and time of a record with a time column, after checking the column.
 
     With ``gaps`` that do not refuse, the gap check is left to :func:`handle_gaps`
-    and the rate is the median interval's.
+    and the rate is the median interval's.  A rate no IMU has is refused unless ``--rate``
+    gave it (:func:`check_imu_rate`).
     """
     if len(time) < 2:
         if rate is None:
@@ -55,6 +59,7 @@ def time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool
     kind = "the effective rate of the bursty time column" if bursty else "the time column"
     if rate is not None and abs(measured - rate) > RATE_TOLERANCE * rate:
         raise InputError(f"{src}: {given_by} disagrees with {kind} ({measured:.6g} Hz)")
+    check_imu_rate(measured, given_by, f"column {name!r} gives", src, name)
     rate = rate if rate is not None else measured
     if bursty:
         n = len(time)
@@ -75,6 +80,20 @@ def time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool
     if bursty or uniform:
         time = np.arange(len(time)) / rate
     return rate, time
+
+
+def check_imu_rate(rate: float, given_by: str, said: str, src: str, name: str = "") -> None:
+    """Refuse a rate no IMU samples at (``IMU_RATES``) unless the user gave it (``rate=``).
+
+    ``said`` says what gave the rate (``"column 'time' gives"``), ``name`` the time column.
+    """
+    if is_imu_rate(rate) or given_by.startswith("rate="):
+        return
+    scale = (f"; if column {name!r} counts milliseconds, scale={{{name!r}: 0.001}} gives seconds"
+             if name else "")
+    raise InputError(f"{src}: {said} a sample rate of {rate:.6g} Hz, outside the "
+                     f"{IMU_RATES[0]:g} Hz to {IMU_RATES[1] / 1e3:g} kHz an IMU samples at; if "
+                     f"that is the record's rate, confirm it with rate={rate:.6g}{scale}")
 
 
 def handle_gaps(data: dict[str, np.ndarray], time: np.ndarray, gaps: str, src: str, name: str,

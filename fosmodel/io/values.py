@@ -157,7 +157,11 @@ def _numeric(col: pd.Series | np.ndarray, src: str, name: str, first_line: int,
     if kind:
         raise InputError(f"{src}: column {name!r} holds {kind} ({col.dtype}); fosmodel reads real "
                          "numbers (time in seconds)")
-    if not (pd.api.types.is_numeric_dtype(col) and not pd.api.types.is_bool_dtype(col)):
+    if col.dtype.kind == "b" or (col.dtype == object
+                                 and pd.api.types.infer_dtype(col, skipna=True) == "boolean"):
+        raise InputError(f"{src}: column {name!r} holds booleans (True/False), not a sensor's "
+                         "readings; read the signal's columns only")
+    if not pd.api.types.is_numeric_dtype(col):
         values = pd.to_numeric(col, errors="coerce")
         bad = np.flatnonzero(values.isna().to_numpy() & col.notna().to_numpy())
         if bad.size:

@@ -899,7 +899,7 @@ class FOSModel(BaseEstimator):
             model = cls(**data["params"])
             fitted = data["fitted"]
             spec = model.candidate_spec()
-            terms = [Term.parse(name) for name in fitted["terms"]]
+            terms = [Term.parse(name, max_degree=spec.degree) for name in fitted["terms"]]
             check_terms_fit_spec(terms, spec)
             coef = np.asarray(fitted["coef"], dtype=float)
             if coef.shape != (len(terms),):

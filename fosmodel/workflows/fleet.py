@@ -6,10 +6,13 @@ the model-order study and the residual loop, as :func:`fosmodel.workflows.imu.ru
 them) and its results are written to the store, in a folder of its own published in one
 rename with its completion marker inside.  A rerun skips the records whose marker is there
 and matches the file and the configuration, so an interrupted run resumes without redoing
-them.  The tasks run one after the other in this process, or on the workers of a Dask
-client (:func:`fosmodel.study.runner.dask_client`); each limits BLAS to one thread, so both
-give the same bits.  On a cluster, the workers read the records and write the store: both
-must be on a file system they share with this process.
+them; a record's folder stays whatever happens to the others (it is published outside the
+command line's all-or-nothing, :func:`fosmodel.io.journal.durable`).  A record refused
+leaves nothing: no folder, no marker (the error names it; a rerun does it again), and a fleet
+refused whole leaves no store.  The tasks run one after the other in this process, or on
+the workers of a Dask client (:func:`fosmodel.study.runner.dask_client`); each limits BLAS to
+one thread, so both give the same bits.  On a cluster, the workers read the records and write
+the store: both must be on a file system they share with this process.
 
 Layout of the store::
 
@@ -33,6 +36,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from ..core.exceptions import InputError
+from ..io.journal import durable
 from ..io.output import write_tables
 from .fleet_record import MARKER, FleetConfig, fingerprint, record_name, run_record
 from .imu import STEPS
@@ -91,22 +95,18 @@ def run_fleet(
     config = config or FleetConfig()
     names = _names(files)
     _check_steps(config.steps)
-    store = Path(store)
-    created = not store.exists()
-    store.mkdir(parents=True, exist_ok=True)
+    store = Path(store)  # made with the first record stored: a fleet refused whole leaves none
     prints = {name: fingerprint(path, config) for name, path in names.items()}
     todo = [n for n in names if not _finished(store / n, prints[n])]
     todo.sort(key=lambda n: -_size(names[n]))  # longest first: the last task is a short one
     failures: dict[str, BaseException] = {}
     with tqdm(total=len(names), initial=len(names) - len(todo), disable=not progress,
-              file=sys.stderr, desc="fleet", unit="record") as bar:
+              file=sys.stderr, desc="fleet", unit="record") as bar, durable():
         for name, error in _run(todo, names, store, config, client):
             if error is not None:
                 failures[name] = error
             bar.update()
     if failures:
-        if created and not any(store.iterdir()):  # a refused fleet leaves nothing behind
-            store.rmdir()
         _raise(failures, len(names), store)
     markers = {n: json.loads((store / n / MARKER).read_text()) for n in names}
     table = pd.concat([pd.read_csv(store / n / "rows.csv") for n in names], ignore_index=True)
