@@ -300,6 +300,21 @@ def test_a_single_spike_of_a_thousand_sigma(tmp_path, mode):
         np.testing.assert_array_equal(kept, np.delete(x, 12_345))
 
 
+def test_a_run_of_outliers_is_an_event_not_a_spike(tmp_path):
+    # the sensor turned for half a second: 50 samples in a row far from rest carry most of
+    # the mean square, but they are the record's motion, which the static checks name
+    x = np.random.default_rng(10).normal(size=20_000)
+    x[5_000:5_050] += 200.0
+    x[9_000:9_004] += 300.0  # and a glitch of four samples: a run, not a spike either
+    p = _write(tmp_path, {"time": np.arange(x.size) / 100, "gx": x})
+    rec = load_record(p)
+    assert rec.outliers["gx"].size == 54
+    x[12_000] = 1e3  # a spike on top: 1e6 of the column's 3.3e6, 30 %
+    with pytest.raises(InputError, match=r"column 'gx': 1 outlier\(s\) .* at sample\(s\) "
+                                         r"12000 .* carry 30 %"):
+        load_record(_write(tmp_path, {"time": np.arange(x.size) / 100, "gx": x}))
+
+
 def test_a_few_outliers_under_the_share_are_kept_with_a_note(tmp_path):
     x = np.random.default_rng(9).normal(size=100_000)
     x[500] = 12.0  # 144 against a mean square of 1e5: 0.14 %
