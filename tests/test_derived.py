@@ -68,3 +68,58 @@ def test_a_fitted_model_rebuilds_its_columns_and_fast_channels():
     without_rate = FOSModel(columns=["cos@1.5Hz"]).fit(y, exog)
     with pytest.raises(InputError, match="can be rebuilt only with the model's sample rate"):
         without_rate.predict(y)
+
+
+HEADERS = ["temp_c", "Accel X (g)", "gyro_rad[0]", "a*b^2", "2nd sensor", "x__y", "u__z",
+           "température", "acc.x [m/s^2]", "_"]
+
+
+@pytest.mark.parametrize("header", HEADERS)
+def test_any_header_round_trips_through_its_token_and_every_name(header):
+    from fosmodel.core.candidates import CandidateSpec, Term
+    from fosmodel.core.derived import (
+        channel_token,
+        lowpass_name,
+        power_name,
+        rate_name,
+        square_name,
+        token_channel,
+    )
+
+    token = channel_token(header)
+    assert token_channel(token) == header
+    assert token.isidentifier() and (token == header) == (header in ("temp_c", "_"))
+    names = [lowpass_name(header, 600), rate_name(header, 60.0), power_name(header, 2, -3.5),
+             power_name(header, 3, 25.25, tau_s=1200), square_name(header)]
+    for name in names:
+        assert is_derived(name) and channels_read([name]) == [header]
+        assert Term.parse(name).name == name  # a term of its own, read back whole
+    spec = CandidateSpec(2, 1, {fast_name(header, 20): 3}, names)  # raises if a name is bad
+    assert channels_read(spec.exog_lags) == [header]
+
+
+def test_a_driver_s_forms_compute_what_their_names_say():
+    from fosmodel.core.derived import first_order_lag, lowpass_name, power_name, rate_name
+
+    rng = np.random.default_rng(0)
+    x = 20 + np.cumsum(rng.standard_normal(N)) * 0.1
+    channels = {"Die temp (C)": x}
+    lag = np.empty(N)  # the recursion, sample by sample: the reference
+    lag[0] = x[0]
+    for k in range(1, N):
+        lag[k] = lag[k - 1] + (x[k] - lag[k - 1]) / (30.0 * RATE)
+    np.testing.assert_allclose(first_order_lag(x, 30.0, RATE), lag, rtol=1e-12)
+    name = lowpass_name("Die temp (C)", 30)
+    assert name == "lowpass(u__Die_20_temp_20__28_C_29_,30s)"
+    np.testing.assert_allclose(derive(name, N, RATE, channels, {}), lag, rtol=1e-12)
+    np.testing.assert_allclose(derive(rate_name("Die temp (C)", 30), N, RATE, channels, {}),
+                               np.r_[0.0, np.diff(lag) * RATE], rtol=0, atol=1e-11)
+    np.testing.assert_allclose(derive(power_name("Die temp (C)", 2, 21.5), N, RATE, channels,
+                                      {}), (x - 21.5) ** 2, rtol=1e-12)
+    np.testing.assert_allclose(derive(power_name("Die temp (C)", 3, -1.0, tau_s=30), N, RATE,
+                                      channels, {}), (lag + 1.0) ** 3, rtol=1e-12)
+    with pytest.raises(InputError, match=r"needs the channel 'Die temp \(C\)'"):
+        derive(name, N, RATE, {}, {})
+    with pytest.raises(InputError, match="shorter than one sample"):
+        derive(lowpass_name("Die temp (C)", 0.001), N, RATE, channels, {})
+    assert not is_derived("pow(cos@1Hz,2,0)")  # a power reads a channel or its lag only

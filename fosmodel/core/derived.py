@@ -1,22 +1,33 @@
 """Columns derived from time and the record's channels, rebuilt from their names.
 
 The residual loop adds user columns to a model (sinusoids, a trend, a step, the
-square of a channel).  Their names say how to compute them, so a saved model
-can be applied to a record again (``fosmodel predict``) without the arrays:
+forms of a driver).  Their names say how to compute them, so a saved model can
+be applied to a record again (``fosmodel predict``) without the arrays:
 
-=====================  ===============================================================
-name                   value at sample ``n`` (``t = n / rate`` from the record's start)
-=====================  ===============================================================
-``cos@<f>Hz``          ``cos(2 pi f t)``
-``sin@<f>Hz``          ``sin(2 pi f t)``
-``t@s``                ``t``
-``exp(-t/<tau>s)``     ``exp(-t / tau)``
-``step@<t0>s``         1 from ``t0`` on, 0 before
-``sq(<channel>)``      ``(x - mu_x)^2``, ``mu_x`` the channel's training mean
-``<channel>_fast<T>s``  ``x[n]`` minus its local level over ``T`` s (the exponentially
-                       weighted mean of ``x[n-1], x[n-2], ...``, :mod:`fosmodel.core.levels`):
-                       the channel's fast part, an input channel with lags of its own
-=====================  ===============================================================
+=========================  ===========================================================
+name                       value at sample ``n`` (``t = n / rate`` from the record's start)
+=========================  ===========================================================
+``cos@<f>Hz``              ``cos(2 pi f t)``
+``sin@<f>Hz``              ``sin(2 pi f t)``
+``t@s``                    ``t``
+``exp(-t/<tau>s)``         ``exp(-t / tau)``
+``step@<t0>s``             1 from ``t0`` on, 0 before
+``sq(<ch>)``               ``(x - mu_x)^2``, ``mu_x`` the channel's training mean
+``<ch>_fast<T>s``          ``x[n]`` minus its local level over ``T`` s (the exponentially
+                           weighted mean of ``x[n-1], x[n-2], ...``, :mod:`fosmodel.core.levels`):
+                           the channel's fast part, an input channel with lags of its own
+``lowpass(<ch>,<T>s)``     the channel through a first-order lag of time constant ``T``:
+                           ``s[n] = s[n-1] + (x[n] - s[n-1]) / (T rate)``, ``s[0] = x[0]``
+                           (a sensor that follows its driver late, as a die follows the air)
+``rate(<ch>,<T>s)``        the rate of change of ``lowpass(<ch>,<T>s)`` per second,
+                           ``(s[n] - s[n-1]) rate`` (0 at ``n = 0``): a smoothed derivative
+``pow(<x>,<p>,<c>)``       ``(x - c)^p`` of ``x`` a channel or a ``lowpass(...)`` of one
+=========================  ===========================================================
+
+``<ch>`` is a channel *token* (:func:`channel_token`): the column's own name when it
+is an identifier (``temp_c``), else an identifier spelling it out (``Accel X (g)``
+becomes ``u__Accel_20_X_20__28_g_29_``), so that any header survives in a term's
+name, where spaces, ``*``, ``^`` and brackets have a meaning of their own.
 
 Time functions restart at the first sample of the record they are computed
 for: a trend or a step fitted on one recording is a statement about time since
@@ -29,20 +40,74 @@ import re
 from collections.abc import Iterable, Mapping
 
 import numpy as np
+from scipy.signal import lfilter
 
 from .exceptions import InputError
 from .levels import level_series
 
 _NUMBER = r"([0-9][0-9.]*(?:e[+-]?[0-9]+)?)"
+_SIGNED = r"(-?[0-9][0-9.]*(?:e[+-]?[0-9]+)?)"
+_TOKEN = r"([A-Za-z_][A-Za-z0-9_]*)"
 _PATTERNS = {
     "cos": re.compile(rf"^cos@{_NUMBER}Hz$"),
     "sin": re.compile(rf"^sin@{_NUMBER}Hz$"),
     "time": re.compile(r"^t@s$"),
     "exp": re.compile(rf"^exp\(-t/{_NUMBER}s\)$"),
     "step": re.compile(rf"^step@{_NUMBER}s$"),
-    "square": re.compile(r"^sq\(([A-Za-z_][A-Za-z0-9_]*)\)$"),
-    "fast": re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)_fast([0-9]+)s$"),
+    "square": re.compile(rf"^sq\({_TOKEN}\)$"),
+    "fast": re.compile(rf"^{_TOKEN}_fast([0-9]+)s$"),
+    "lowpass": re.compile(rf"^lowpass\({_TOKEN},{_NUMBER}s\)$"),
+    "rate": re.compile(rf"^rate\({_TOKEN},{_NUMBER}s\)$"),
+    "power": re.compile(rf"^pow\((.+),([0-9]+),{_SIGNED}\)$"),
 }
+#: Kinds whose first argument is a channel token.
+_READS = ("square", "fast", "lowpass", "rate")
+_IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+#: The start of a token that spells out a name which is not a plain identifier.
+_SPELLED = "u__"
+
+
+def channel_token(name: str) -> str:
+    """Return an identifier that names the channel ``name`` in derived names and terms.
+
+    An identifier without ``__`` is its own token; any other name (spaces, brackets,
+    parentheses, a leading digit, a double underscore) is spelled out after ``u__``: letters
+    and digits as they are, every other character as ``_<hex code>_``.
+
+    Examples
+    --------
+    >>> channel_token("temp_c"), channel_token("Accel X (g)")
+    ('temp_c', 'u__Accel_20_X_20__28_g_29_')
+    """
+    if _IDENTIFIER.match(name) and "__" not in name:
+        return name
+    return _SPELLED + "".join(c if c.isascii() and c.isalnum() else f"_{ord(c):x}_"
+                              for c in name)
+
+
+def token_channel(token: str) -> str:
+    """Return the channel name a :func:`channel_token` stands for.
+
+    Raises
+    ------
+    InputError
+        A spelled-out token that does not decode.
+    """
+    if not token.startswith(_SPELLED):
+        return token
+    out, body, i = [], token[len(_SPELLED):], 0
+    while i < len(body):
+        if body[i] != "_":
+            out.append(body[i])
+            i += 1
+            continue
+        end = body.find("_", i + 1)
+        try:
+            out.append(chr(int(body[i + 1 : end], 16)))
+        except ValueError:
+            raise InputError(f"{token!r} is not a channel token (a bad escape at {i})") from None
+        i = end + 1
+    return "".join(out)
 
 
 def _match(name: str) -> tuple[str, ...] | None:
@@ -53,9 +118,18 @@ def _match(name: str) -> tuple[str, ...] | None:
     return None
 
 
+def _power_base(text: str) -> tuple[str, str] | None:
+    """``("channel", token)`` or ``("lowpass", name)``: what a power's base reads, or None."""
+    if _IDENTIFIER.match(text):
+        return "channel", text
+    found = _match(text)
+    return ("lowpass", text) if found and found[0] == "lowpass" else None
+
+
 def is_derived(name: str) -> bool:
     """Whether a column name says how to compute the column."""
-    return _match(name) is not None
+    found = _match(name)
+    return found is not None and (found[0] != "power" or _power_base(found[1]) is not None)
 
 
 # Frequencies and step times keep 8 significant digits: a line's phase must hold over
@@ -87,12 +161,28 @@ def step_name(time_s: float) -> str:
 
 def square_name(channel: str) -> str:
     """``sq(temp)``: the name of the square of the centred ``channel``."""
-    return f"sq({channel})"
+    return f"sq({channel_token(channel)})"
 
 
 def fast_name(channel: str, tau_s: float) -> str:
     """``ay_g_fast20s``: the channel minus its local level over ``tau_s`` (whole seconds)."""
-    return f"{channel}_fast{round(tau_s)}s"
+    return f"{channel_token(channel)}_fast{round(tau_s)}s"
+
+
+def lowpass_name(channel: str, tau_s: float) -> str:
+    """``lowpass(temp_c,600s)``: ``channel`` through a first-order lag of ``tau_s`` seconds."""
+    return f"lowpass({channel_token(channel)},{tau_s:.6g}s)"
+
+
+def rate_name(channel: str, tau_s: float) -> str:
+    """``rate(temp_c,60s)``: the rate of change per second of ``lowpass(channel, tau_s)``."""
+    return f"rate({channel_token(channel)},{tau_s:.6g}s)"
+
+
+def power_name(channel: str, power: int, centre: float, tau_s: float | None = None) -> str:
+    """``pow(temp_c,2,25)``: ``(x - centre)^power`` of the channel, or of its lag over ``tau_s``."""
+    base = channel_token(channel) if tau_s is None else lowpass_name(channel, tau_s)
+    return f"pow({base},{int(power)},{centre:.8g})"
 
 
 def channels_read(names: Iterable[str]) -> list[str]:
@@ -100,9 +190,35 @@ def channels_read(names: Iterable[str]) -> list[str]:
     out = []
     for name in names:
         found = _match(name)
-        if found and found[0] in ("square", "fast") and found[1] not in out:
-            out.append(found[1])
+        if found is None:
+            continue
+        if found[0] == "power":
+            base = _power_base(found[1])
+            found = None if base is None else (_match(base[1]) if base[0] == "lowpass"
+                                               else ("channel", base[1]))
+        if found and (found[0] in _READS or found[0] == "channel"):
+            channel = token_channel(found[1])
+            if channel not in out:
+                out.append(channel)
     return out
+
+
+def first_order_lag(x: np.ndarray, tau_s: float, rate: float) -> np.ndarray:
+    """``s[n] = s[n-1] + a (x[n] - s[n-1])``, ``a = 1 / (tau_s rate)``, from ``s[0] = x[0]``.
+
+    Raises
+    ------
+    InputError
+        A time constant shorter than one sample.
+    """
+    x = np.asarray(x, dtype=float)
+    a = 1.0 / (tau_s * rate)
+    if not 0 < a <= 1:
+        raise InputError(f"a first-order lag of {tau_s:g} s is shorter than one sample at "
+                         f"{rate:g} Hz")
+    if not len(x):
+        return x.copy()
+    return lfilter([a], [1.0, a - 1.0], x, zi=[(1.0 - a) * x[0]])[0]
 
 
 def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
@@ -112,35 +228,56 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
     Parameters
     ----------
     channels : mapping of str to ndarray
-        The record's channels (for ``sq(<channel>)``).
+        The record's channels by their names (for the columns that read one).
     offsets : mapping of str to float
         Training means of the channels (for ``sq(<channel>)``).
 
     Raises
     ------
     InputError
-        Not a derived name, or a square of a channel without its values or mean.
+        Not a derived name, or a column that reads a channel not given (or, for a square,
+        without its mean).
     """
     found = _match(name)
-    if found is None:
+    if found is None or not is_derived(name):
         raise InputError(f"column {name!r} is not one fosmodel can derive; pass its values")
-    kind, arg = found[0], (found[1] if len(found) > 1 else "")
-    if kind == "fast":
-        if arg not in channels:
-            raise InputError(f"channel {name!r} needs the channel {arg!r}")
-        x = np.asarray(channels[arg], dtype=float)[:n]
-        return x - level_series(x, float(found[2]), rate)
+    kind = found[0]
+    if kind == "power":
+        base, p, centre = found[1], int(found[2]), float(found[3])
+        kind_of_base, text = _power_base(base) or ("", "")
+        x = (_channel(name, text, n, channels) if kind_of_base == "channel"
+             else derive(text, n, rate, channels, offsets))
+        return (x - centre) ** p
+    if kind == "square":
+        channel = token_channel(found[1])
+        if channel not in channels or channel not in offsets:
+            raise InputError(f"column {name!r} needs the channel {channel!r} and its training "
+                             "mean")
+        return (_channel(name, found[1], n, channels) - offsets[channel]) ** 2
+    if kind in _READS:
+        x = _channel(name, found[1], n, channels)
+        if kind == "fast":
+            return x - level_series(x, float(found[2]), rate)
+        lagged = first_order_lag(x, float(found[2]), rate)
+        if kind == "lowpass":
+            return lagged
+        return np.r_[0.0, np.diff(lagged) * rate] if n else lagged
     t = np.arange(n) / rate
+    arg = float(found[1]) if len(found) > 1 else 0.0
     if kind == "cos":
-        return np.cos(2 * np.pi * float(arg) * t)
+        return np.cos(2 * np.pi * arg * t)
     if kind == "sin":
-        return np.sin(2 * np.pi * float(arg) * t)
+        return np.sin(2 * np.pi * arg * t)
     if kind == "time":
         return t
     if kind == "exp":
-        return np.exp(-t / float(arg))
-    if kind == "step":
-        return (t >= float(arg)).astype(float)
-    if arg not in channels or arg not in offsets:
-        raise InputError(f"column {name!r} needs the channel {arg!r} and its training mean")
-    return (np.asarray(channels[arg], dtype=float)[:n] - offsets[arg]) ** 2
+        return np.exp(-t / arg)
+    return (t >= arg).astype(float)
+
+
+def _channel(name: str, token: str, n: int, channels: Mapping[str, np.ndarray]) -> np.ndarray:
+    """The first ``n`` samples of the channel ``token`` stands for, which ``name`` reads."""
+    channel = token_channel(token)
+    if channel not in channels:
+        raise InputError(f"column {name!r} needs the channel {channel!r}")
+    return np.asarray(channels[channel], dtype=float)[:n]
