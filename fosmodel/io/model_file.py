@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..core.exceptions import InputError
+from ..models.compensation import check_compensation
 from ..models.model import FOSModel
 from .output import write_text
 
@@ -59,6 +60,10 @@ def read_model(path: str | os.PathLike[str]) -> FOSModel:
 
 def _check_numbers(model: FOSModel, path: str | os.PathLike[str]) -> None:
     """Refuse a model whose weights are not finite or whose source column is not a name."""
+    try:
+        check_compensation(model.compensation)
+    except InputError as exc:
+        raise InputError(f"{path}: corrupted model file: {exc}") from None
     numbers = [*model.coef_, model.intercept_, *model.offsets_.values()]
     if not np.isfinite(numbers).all():
         raise InputError(f"{path}: corrupted model file: a weight or offset is not a finite "

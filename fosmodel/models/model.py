@@ -60,6 +60,11 @@ from ..core.levels import (
     with_levels,
 )
 from ..core.validation import as_channels, as_signal, check_fitted
+from .compensation import (
+    check_compensation,
+    compensation_channels,
+    compensation_series,
+)
 from .dynamics import (
     ar_free_run,
     ar_roots,
@@ -165,6 +170,11 @@ class FOSModel(BaseEstimator):
     correlations : {"fast", "reference"}
         Korenberg's correlation tables, or point by point on the candidate
         matrix (slow, for checking).
+    compensation : dict of str to float, optional
+        A known part of the output with fixed weights, by derived column name
+        (:mod:`fosmodel.models.compensation`): the model's terms are fitted to, and
+        its levels follow, the output minus ``sum_j w_j col_j``, which every
+        prediction and free run adds back.
 
     Attributes
     ----------
@@ -218,6 +228,7 @@ class FOSModel(BaseEstimator):
         dependence_tol: float = 1e-10,
         max_candidates: int = 100_000,
         correlations: str = "fast",
+        compensation: dict[str, float] | None = None,
     ) -> None:
         self.max_lag = max_lag
         self.degree = degree
@@ -233,6 +244,7 @@ class FOSModel(BaseEstimator):
         self.dependence_tol = dependence_tol
         self.max_candidates = max_candidates
         self.correlations = correlations
+        self.compensation = compensation
 
     # -- fitting -------------------------------------------------------------------------
 
@@ -276,6 +288,8 @@ class FOSModel(BaseEstimator):
             raise InputError(
                 f"correlations must be 'fast' or 'reference', not {self.correlations!r}")
         y_arr = as_signal(y, "y")
+        if check_compensation(self.compensation):
+            y_arr = y_arr - self._compensation(exog, len(y_arr))
         n_cand = count_candidates(spec)
         n0 = spec.lag_window
         log.info("FOS candidate set: %d candidates (L=%d, CP=%d, exog=%s, columns=%d)",
@@ -334,6 +348,16 @@ class FOSModel(BaseEstimator):
         if thin:
             warnings.warn(FitWarning(thin), stacklevel=2)
         return self
+
+    def _compensation(self, exog: Exog | None, n: int) -> np.ndarray:
+        """The compensation over ``n`` samples (zeros without one)."""
+        return compensation_series(check_compensation(self.compensation), exog, n, self.rate)
+
+    def _plain(self) -> FOSModel:
+        """This fitted model without its compensation: the model of ``y`` minus it."""
+        plain = copy.copy(self)
+        plain.compensation = None
+        return plain
 
     def _thin(self) -> str | None:
         """Return a note when the fitting window holds few samples per weight, else None."""
@@ -494,7 +518,9 @@ class FOSModel(BaseEstimator):
         names = [*self.spec_.exog_lags, *self.spec_.columns]
         rebuilt = [c for c in names if is_derived(c)] if self.rate is not None else []
         read = [c for c in names if c not in rebuilt]
-        return read + [c for c in channels_read(rebuilt) if c not in read]
+        return read + [c for c in [*channels_read(rebuilt),
+                                   *compensation_channels(self.compensation or {})]
+                       if c not in read]
 
     def _offsets_for(self, channels: Mapping[str, object]) -> dict[str, float]:
         return {OUTPUT: self.offsets_[OUTPUT], **{k: self.offsets_[k] for k in channels}}
@@ -517,6 +543,11 @@ class FOSModel(BaseEstimator):
         ndarray, or Series with the index of ``y`` if ``y`` is a Series
         """
         self._check_fitted()
+        if self.compensation:
+            y_arr = as_signal(y, "y")
+            comp = self._compensation(exog, len(y_arr))
+            pred = self._plain().predict(y_arr - comp, exog, segments, start=start)
+            return _as_input_type(np.asarray(pred) + comp, y)
         n0 = self.lag_window_
         if segments is not None:
             if start:
@@ -589,6 +620,11 @@ class FOSModel(BaseEstimator):
         """
         self._check_fitted()
         y_arr = as_signal(y, "y")
+        if self.compensation:
+            refit = self._plain().refit_weights(y_arr - self._compensation(exog, len(y_arr)),
+                                                exog, segments)
+            refit.compensation = self.compensation
+            return refit
         n0 = self.lag_window_
         runs = _usable(segments, len(y_arr), n0)
         if sum(s.stop - s.start - n0 for s in runs) < len(self._terms) + 2:
@@ -597,9 +633,15 @@ class FOSModel(BaseEstimator):
         signals = self._signals(y_arr, exog, levels=segments is None)
         pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, self.spec_)
                   for s in runs]
-        with one_blas_thread():
+        corr: Correlations
+        if self.correlations == "reference":
+            corr = DataCorrelations(
+                np.vstack([evaluate_terms(self._terms, piece, n0) for piece in pieces]),
+                np.concatenate([piece[OUTPUT][n0:] for piece in pieces]))
+        else:
             parts = [LagCorrelations(self._terms, piece, n0) for piece in pieces]
             corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
+        with one_blas_thread():
             res = fos_search(corr, StopRule("max_terms", max_terms=len(self._terms)),
                               intercept=True, dependence_tol=self.dependence_tol)
         new = copy.copy(self)
@@ -670,6 +712,11 @@ class FOSModel(BaseEstimator):
             (the samples from the divergence on are NaN).
         """
         self._check_fitted()
+        if self.compensation:
+            past = as_signal(y_init, "y_init")
+            comp = self._compensation(exog, len(past) + int(n_steps))
+            run = self._plain().simulate(past - comp[: len(past)], n_steps, exog, noise)
+            return run + comp[len(past):]
         n0 = self.lag_window_
         y0, drive = free_run_inputs(y_init, n_steps, noise, n0)
         warn_if_unstable(self.ar_coefficients(), "the fitted output dynamics")
@@ -723,6 +770,12 @@ class FOSModel(BaseEstimator):
         ndarray of shape (len(starts), n_steps)
         """
         self._check_fitted()
+        if self.compensation:
+            y_arr = as_signal(y, "y")
+            comp = self._compensation(exog, len(y_arr))
+            runs = self._plain().free_runs(y_arr - comp, starts, n_steps, exog)
+            at = np.asarray(starts, dtype=np.int64).reshape(-1, 1) + np.arange(n_steps)
+            return runs + comp[at]
         n, n0 = len(as_signal(y, "y")), self.lag_window_
         s = np.asarray(starts, dtype=np.int64).reshape(-1)
         if not s.size:
@@ -804,6 +857,9 @@ class FOSModel(BaseEstimator):
             *[(kind.upper(), f"{criterion(kind, final, len(self.terms_) + 1, self.n_samples_):.6g}")
               for kind in ("aic", "bic", "fpe")],
             ("Output offset mu_y", f"{self.offsets_[OUTPUT]:.6g}"),
+            *([("Compensation", " + ".join(f"{w:.6g} {name}"
+                                          for name, w in self.compensation.items()))]
+              if self.compensation else []),
         ]
         notes = [
             "Terms are products of centred signals: y[n-l] stands for y[n-l] - mu_y."
@@ -818,6 +874,9 @@ class FOSModel(BaseEstimator):
         thin = self._thin()
         if thin:
             notes.append(thin[0].upper() + thin[1:] + ".")
+        if self.compensation:
+            notes.append("The terms model the output minus the compensation (fixed weights on "
+                         "derived columns of the drivers); predictions and free runs add it back.")
         if spec.levels:
             notes.append("level@<tau>s is the exponentially weighted mean of the output's past "
                          "(time constant tau); in a free run it follows the model's own output.")
