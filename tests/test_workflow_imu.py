@@ -59,7 +59,7 @@ def test_the_rows_are_the_steps_run_alone(result, record):
                                   a.study.rows.drop(columns="runtime_s"))
     others = {k: v for k, v in record.columns.items() if k != a.axis.column}
     loop = close_loop(record.columns[a.axis.column], others,
-                      config.loop_config(record.rate, a.axis))
+                      config.loop_config(record.rate, a.axis, [x.axis for x in result.axes]))
     assert loop.after == a.loop.after and len(loop.steps) == len(a.loop.steps)
 
 

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.candidates import count_candidates
-from ..core.exceptions import InputError
+from ..core.exceptions import InputError, OptionError
 from ..core.levels import levels_for
 from ..io.loader import Record, load_record, parse_scales
 from ..io.model_file import read_model, write_model
@@ -32,7 +32,8 @@ from ..io.output import (
     write_text,
 )
 from ..models.model import FOSModel
-from ..noise.axes import SENSORS, Axis, resolve_axes
+from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
+from ..noise.metrics import sensor_of
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
@@ -184,27 +185,36 @@ def study(args: argparse.Namespace) -> int:
     return 0
 
 
+#: The command line's flag of each loop option its messages may name.
+LOOP_FLAGS = {"horizons_s": "--horizons", "train": "--split", "evaluate": "--split",
+              "aux": "--aux", "max_lag": "--max-lag", "units": "--units"}
+
+
 def close_loop(args: argparse.Namespace) -> int:
     from ..loop.closeloop import LoopConfig
     from ..loop.closeloop import close_loop as run_loop
     from ..loop.loop_report import CONSOLE_WIDTH, console_summary, write_loop_report
+    from ..loop.roles import channel_roles
 
     json_path = writable_file(args.json) if args.json else None
     model_path = writable_file(args.model) if args.model else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path, "--model": model_path}, {"the record": args.file})
-    if args.aux is not None and args.column in args.aux:
-        raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
-                         "residual (its lag 0 is the value predicted)")
-    rec = _load(args, columns=None if args.aux is None else [args.column, *args.aux])
+    rec = _load(args)
     axis = _axes(args, [args.column], rec, optional=True)
     y = rec.column(args.column)
-    aux = args.aux if args.aux is not None else [c for c in rec.names if c != args.column]
-    channels = {name: rec.column(name) for name in aux}
+    channels = {name: rec.column(name) for name in rec.names if name != args.column}
+    sensor = axis[0].sensor if axis else _sensor_of(rec, args.column)
     train, evaluate = args.split.fractions(rec.n_samples, rec.require_rate())
-    config = LoopConfig(rate=rec.require_rate(), sensor=axis[0].sensor if axis else None,
-                        units=axis[0].units if axis else None,
-                        max_lag=args.max_lag, train=train, evaluate=evaluate)
+    try:
+        roles = channel_roles(channels, sensor, aux=args.aux or (),
+                              sensors={c: s for c in channels if (s := _sensor_of(rec, c))})
+        config = LoopConfig(rate=rec.require_rate(), sensor=axis[0].sensor if axis else None,
+                            units=axis[0].units if axis else None, max_lag=args.max_lag,
+                            train=train, evaluate=evaluate, horizons_s=args.horizons,
+                            companions=roles.companions, aux=roles.opted_in)
+    except OptionError as exc:
+        raise InputError(exc.with_flag(LOOP_FLAGS)) from None
     result = run_loop(y, channels, config, progress=lambda line: print(
         textwrap.fill(f"fosmodel: {line}", CONSOLE_WIDTH, subsequent_indent="fosmodel:     "),
         file=sys.stderr, flush=True))
@@ -222,6 +232,13 @@ def close_loop(args: argparse.Namespace) -> int:
           + (f" and {json_path}" if json_path else "")
           + (f"; final model written to {model_path}" if model_path else ""))
     return 0
+
+
+def _sensor_of(rec: Record, column: str) -> str | None:
+    """Return the sensor a column's units (as its file declares them) or its name tell, if any."""
+    if column in rec.units:
+        return sensor_of(rec.units[column])
+    return infer_axis(column)[0]
 
 
 def allan(args: argparse.Namespace) -> int:

@@ -14,6 +14,7 @@ from .arguments import (
     SPLIT_HELP,
     UNITS_HELP,
     add_loader_options,
+    durations,
     exog_arg,
     int_list,
     levels_arg,
@@ -112,7 +113,10 @@ def build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--column", required=True, help="column to model")
     add_loader_options(loop, contiguous="the residual loop")
     loop.add_argument("--aux", type=name_list, metavar="COL[,COL...]",
-                      help="columns that may explain the residual (default: every other column)")
+                      help="companions to take as inputs all the same: other axes of the same "
+                           "IMU and kind, which measure the motion in use (default: none; every "
+                           "other column is read, the other axes as cross-axis noise, the rest "
+                           "as drivers)")
     loop.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS",
                       help="units of the column (deg/s, or gx=deg/s), which tell the sensor, "
                            "for position errors (default: none, no position errors)")
@@ -121,6 +125,10 @@ def build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--max-lag", type=int, default=10, help="L of the starting model")
     loop.add_argument("--split", type=parsed(SplitSpec.parse), default="50%,20%",
                       metavar="TRAIN,EVALUATE", help=SPLIT_HELP)
+    loop.add_argument("--horizons", type=durations, default="30s,5min,30min",
+                      metavar="T[,T...]",
+                      help="outage lengths judged and reported, each where the segments hold "
+                           "enough windows (s, min or h)")
     loop.add_argument("--title", help="title of the report")
     loop.add_argument("--out", required=True, help="output directory (created)")
     loop.add_argument("--json", help="also write the before/after metrics and effects as JSON")

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any, TypeAlias
 
 import numpy as np
 import pandas as pd
@@ -22,7 +23,7 @@ from numpy.typing import ArrayLike
 from ..core.derived import channels_read, derive, is_derived
 from ..core.exceptions import InputError
 
-Exog = Mapping[str, ArrayLike] | pd.DataFrame
+Exog: TypeAlias = Mapping[str, ArrayLike] | pd.DataFrame
 
 
 def check_compensation(weights: Mapping[str, float] | None) -> dict[str, float]:
@@ -70,10 +71,10 @@ def compensation_series(weights: Mapping[str, float], exog: Exog | None, n: int,
         column of another length.
     """
     total = np.zeros(n)
-    given = {str(k): exog[k] for k in exog.keys()} if exog is not None else {}
+    given: dict[str, Any] = {str(k): exog[k] for k in exog.keys()} if exog is not None else {}
     for name, w in weights.items():
         if name in given:
-            values = np.asarray(given[name], dtype=float)
+            values = np.asarray(given[name], dtype=np.float64)
             if values.shape != (n,):
                 raise InputError(f"compensation column {name!r} has {values.size} samples, "
                                  f"the output has {n}")

@@ -350,11 +350,11 @@ class FOSModel(BaseEstimator):
         return self
 
     def _compensation(self, exog: Exog | None, n: int) -> np.ndarray:
-        """The compensation over ``n`` samples (zeros without one)."""
+        """Return the compensation over ``n`` samples (zeros without one)."""
         return compensation_series(check_compensation(self.compensation), exog, n, self.rate)
 
     def _plain(self) -> FOSModel:
-        """This fitted model without its compensation: the model of ``y`` minus it."""
+        """Return this fitted model without its compensation: the model of ``y`` minus it."""
         plain = copy.copy(self)
         plain.compensation = None
         return plain

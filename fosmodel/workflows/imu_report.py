@@ -22,6 +22,7 @@ import textwrap
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ..io.model_file import write_model
@@ -216,8 +217,9 @@ def console_summary(result: ImuResult) -> str:
         "FOS (m)": study["FOS outage error (m, 30 s)"].map("{:.3g}".format),
         "base (m)": study["baseline outage error (m, 30 s)"].map("{:.3g}".format),
         "kept": loop["effects kept"],
-        "loop (m)": [f"{b:.3g} -> {a:.3g}" for b, a in
-                     zip(loop["outage error before (m)"], loop["outage error after (m)"])],
+        "loop (m)": ["-" if np.isnan(b) or np.isnan(a) else f"{b:.3g} -> {a:.3g}" for b, a in
+                     zip(loop["30 s outage error before (m)"],
+                         loop["30 s outage error after (m)"])],
     })
     lines = ["Noise terms (Allan), 30 s outage position error of the best FOS and baseline "
              "(study),", "effects kept and outage error before -> after (loop), prediction "
