@@ -2,9 +2,10 @@
 
 Build a record from named presets::
 
-    from data_synth import make_scenario, write_record
+    from data_synth import make_scenario, make_sessions, write_record
     rec = make_scenario("paper_gyro_y", duration=600, seed=1)
     write_record(rec, "out/gyro.csv")          # + out/gyro.truth.json
+    s1, s2, s3 = make_sessions("temperature_sessions", seed=1)   # one sensor, three days
 
 or compose one from sources::
 
@@ -20,11 +21,13 @@ Modules: :mod:`~data_synth.units` (conversions), :mod:`~data_synth.sources`
 :mod:`~data_synth.effects` (biases, inputs, functions of time, quantization),
 :mod:`~data_synth.profiles` (temperature and rate profiles),
 :mod:`~data_synth.terms` (exact lag models in fosmodel's term grammar),
+:mod:`~data_synth.orientation` (gravity and earth rate of a static attitude),
+:mod:`~data_synth.imu` (six-axis sweep sessions, axes with shared noise),
 :mod:`~data_synth.record` (SynthRecord, compose), :mod:`~data_synth.scenarios`
-(presets), :mod:`~data_synth.io` (CSV + truth sidecar), :mod:`~data_synth.cli`.
+(presets, sessions), :mod:`~data_synth.io` (CSV + truth sidecar), :mod:`~data_synth.cli`.
 """
 
-from data_synth.arrays import CorrelatedRandomWalk, CorrelatedWhiteNoise
+from data_synth.arrays import CorrelatedGaussMarkov, CorrelatedRandomWalk, CorrelatedWhiteNoise
 from data_synth.base import Source
 from data_synth.effects import (
     AuxInput,
@@ -37,10 +40,11 @@ from data_synth.effects import (
     TurnOnBias,
     Vibration,
 )
-from data_synth.io import truth_path, write_record
-from data_synth.profiles import RoomCycle, StepProfile, WarmUp
+from data_synth.io import session_paths, truth_path, write_record, write_sessions
+from data_synth.orientation import Orientation
+from data_synth.profiles import RoomCycle, StepProfile, Sweep, WarmUp
 from data_synth.record import SynthRecord, compose
-from data_synth.scenarios import list_scenarios, make_scenario
+from data_synth.scenarios import list_scenarios, make_scenario, make_sessions
 from data_synth.sources import (
     ARProcess,
     BiasInstability,
@@ -58,17 +62,20 @@ __all__ = [
     "BiasInstability",
     "BiasStep",
     "ConstantBias",
+    "CorrelatedGaussMarkov",
     "CorrelatedRandomWalk",
     "CorrelatedWhiteNoise",
     "Drift",
     "GaussMarkov",
     "NonlinearAR",
+    "Orientation",
     "Quantizer",
     "RandomWalk",
     "RoomCycle",
     "ScaleFactorError",
     "Source",
     "StepProfile",
+    "Sweep",
     "SynthRecord",
     "TemperatureBias",
     "TemperatureWhiteNoise",
@@ -80,6 +87,9 @@ __all__ = [
     "evaluate",
     "list_scenarios",
     "make_scenario",
+    "make_sessions",
+    "session_paths",
     "truth_path",
     "write_record",
+    "write_sessions",
 ]

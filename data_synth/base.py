@@ -63,6 +63,9 @@ class Source:
     declared: bool = True
 
     kind: ClassVar[str] = "source"
+    #: True for a component that is one constant over the record (a bias): the truth
+    #: adds it to the column's ``constants``.
+    constant: ClassVar[bool] = False
 
     @property
     def label(self) -> str:

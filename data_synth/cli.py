@@ -1,7 +1,9 @@
 """The generator's command line, mounted by fosmodel as ``fosmodel synth``.
 
 ``fosmodel synth SCENARIO --duration S --rate HZ --seed N --out FILE.csv``
-writes ``FILE.csv`` and ``FILE.truth.json``; ``--list`` prints the scenarios.
+writes ``FILE.csv`` and ``FILE.truth.json``, or for a scenario of several
+sessions ``FILE_s1.csv``, ``FILE_s1.truth.json``, ... one pair per session;
+``--list`` prints the scenarios.
 """
 
 from __future__ import annotations
@@ -10,8 +12,8 @@ import argparse
 import json
 from collections.abc import Sequence
 
-from data_synth.io import write_record
-from data_synth.scenarios import SCENARIOS, make_scenario
+from data_synth.io import write_record, write_sessions
+from data_synth.scenarios import SCENARIOS, make_sessions
 from fosmodel.core.exceptions import InputError
 
 
@@ -49,12 +51,13 @@ def run(args: argparse.Namespace) -> int:
     if args.list:
         width = max(map(len, SCENARIOS))
         for name, sc in SCENARIOS.items():
-            defaults = f"{sc.duration:g} s at {sc.rate:g} Hz"
-            print(f"{name:<{width}}  {defaults:<18}  {sc.description}")
+            sessions = f"{sc.sessions} x " if sc.sessions > 1 else ""
+            defaults = f"{sessions}{sc.duration:g} s at {sc.rate:g} Hz"
+            print(f"{name:<{width}}  {defaults:<22}  {sc.description}")
         return 0
     if not args.scenario or not args.out:
         raise InputError("give a SCENARIO and --out FILE.csv (or --list)")
-    record = make_scenario(
+    records = make_sessions(
         args.scenario,
         duration=args.duration,
         rate=args.rate,
@@ -62,10 +65,14 @@ def run(args: argparse.Namespace) -> int:
         **_overrides(args.set),
     )
     try:
-        csv_path, truth_path = write_record(record, args.out, time=not args.no_time)
+        if len(records) == 1:
+            written = [write_record(records[0], args.out, time=not args.no_time)]
+        else:
+            written = write_sessions(records, args.out, time=not args.no_time)
     except OSError as exc:
         raise InputError(f"cannot write {args.out}: {exc}") from exc
-    print(f"wrote {csv_path} ({record.n_samples} samples) and {truth_path}")
+    for record, (csv_path, truth_path) in zip(records, written):
+        print(f"wrote {csv_path} ({record.n_samples} samples) and {truth_path}")
     return 0
 
 

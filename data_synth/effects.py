@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.polynomial import Polynomial
+from scipy.signal import lfilter
 
 from data_synth.base import Source, as_float_tuple
 from data_synth.terms import Representation, TermSet, add_term
@@ -31,6 +32,7 @@ class ConstantBias(Source):
 
     value: float
     kind: ClassVar[str] = "constant_bias"
+    constant: ClassVar[bool] = True
 
     def generate(self, n, rate, rng, inputs=None):
         return np.full(n, float(self.value))
@@ -51,6 +53,7 @@ class TurnOnBias(Source):
 
     sigma: float
     kind: ClassVar[str] = "turn_on_bias"
+    constant: ClassVar[bool] = True
 
     def generate(self, n, rate, rng, inputs=None):
         return np.full(n, self.sigma * rng.standard_normal())
@@ -145,18 +148,26 @@ class AuxInput(Source):
 class TemperatureBias(Source):
     """Temperature-dependent bias ``sum_k coefs[k] * (T - t_ref_c)^k`` of the column ``input``.
 
-    The truth gives the coefficients about ``t_ref_c`` and, as terms, the same
-    polynomial expanded in powers of the raw column: ``1``, ``temp_c[n-0]``,
-    ``temp_c[n-0]^2``...
+    ``T`` is the column itself, or with ``lag_s > 0`` the sensor's own temperature
+    following it through a first-order thermal lag,
+    ``T[n] = phi T[n-1] + (1 - phi) u[n]``, ``phi = exp(-1/(rate*lag_s))``, settled
+    at ``u[0]`` before the start (the convention of
+    :class:`~data_synth.profiles.StepProfile`).  The truth gives the coefficients
+    about ``t_ref_c`` and, without a lag, as terms, the same polynomial expanded in
+    powers of the raw column: ``1``, ``temp_c[n-0]``, ``temp_c[n-0]^2``...; a lagged
+    bias has no finite lag form (its terms are null).
     """
 
     coefs: tuple[float, ...]
     t_ref_c: float = 25.0
     input: str = "temp_c"
+    lag_s: float = 0.0
     kind: ClassVar[str] = "temperature_bias"
 
     def __post_init__(self):
         object.__setattr__(self, "coefs", as_float_tuple(self.coefs, "coefs"))
+        if not (math.isfinite(self.lag_s) and self.lag_s >= 0):
+            raise ValueError(f"{self.label}: lag_s must be >= 0, got {self.lag_s!r}")
 
     @property
     def requires(self):
@@ -169,8 +180,16 @@ class TemperatureBias(Source):
         raw[: len(shifted.coef)] = shifted.coef
         return tuple(float(c) for c in raw)
 
+    def sensor_temperature(self, temp: np.ndarray, rate: float) -> np.ndarray:
+        """The temperature the bias follows: ``temp`` itself, or through the thermal lag."""
+        if self.lag_s == 0:
+            return temp
+        phi = math.exp(-1.0 / (rate * self.lag_s))
+        return lfilter([1.0 - phi], [1.0, -phi], temp, zi=[phi * temp[0]])[0]
+
     def generate(self, n, rate, rng, inputs: Mapping[str, np.ndarray] | None = None):
-        return Polynomial(self.coefs)(self.need(inputs, self.input, n) - self.t_ref_c)
+        temp = self.sensor_temperature(self.need(inputs, self.input, n), rate)
+        return Polynomial(self.coefs)(temp - self.t_ref_c)
 
     def params(self, rate, units, out):
         return {
@@ -178,14 +197,21 @@ class TemperatureBias(Source):
             "t_ref_c": self.t_ref_c,
             "coefs": list(self.coefs),
             "raw_coefs": list(self.raw_coefs()),
+            "lag_s": self.lag_s,
+            "formula": "sum_k coefs[k]*(T - t_ref_c)^k, T = the input column, or with lag_s > 0 "
+            "T[n] = phi*T[n-1] + (1 - phi)*input[n], phi = exp(-1/(rate_hz*lag_s)), "
+            "T[-1] = input[0]",
             "units": {
                 "t_ref_c": "degC",
                 "coefs": f"{units}/degC^k (k = index)",
                 "raw_coefs": f"{units}/degC^k (k = index)",
+                "lag_s": "s",
             },
         }
 
     def representation(self, rate, out):
+        if self.lag_s > 0:
+            return None
         terms: TermSet = {}
         for k, c in enumerate(self.raw_coefs()):
             add_term(terms, [(self.input, 0)] * k, c)

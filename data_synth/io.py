@@ -6,7 +6,8 @@ written with Python's shortest round-trip representation (``repr``), so the
 float64 values are recovered exactly and the same record always gives the same
 bytes.  Nothing else goes into the file: no comment, no metadata, so an
 undeclared effect leaves no trace there.  The ground truth goes to
-``<stem>.truth.json`` beside it.
+``<stem>.truth.json`` beside it.  The sessions of a multi-session record go to
+``<stem>_s1.csv``, ``<stem>_s2.csv``... (:func:`write_sessions`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from __future__ import annotations
 import copy
 import json
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 from data_synth.record import SynthRecord
@@ -71,3 +73,23 @@ def write_record(
             fh.write("".join(row % r for r in zip(*chunk)))
     write_text(sidecar, text)
     return path_csv, sidecar
+
+
+def session_paths(path_csv: str | os.PathLike[str], count: int) -> list[Path]:
+    """The CSV paths of ``count`` sessions: ``out/rec.csv`` -> ``out/rec_s1.csv``, ..."""
+    path = Path(path_csv)
+    return [path.with_name(f"{path.stem}_s{k}{path.suffix}") for k in range(1, count + 1)]
+
+
+def write_sessions(
+    records: Sequence[SynthRecord], path_csv: str | os.PathLike[str], *, time: bool = True
+) -> list[tuple[Path, Path]]:
+    """Write each session with :func:`write_record`, one file each (:func:`session_paths`).
+
+    Returns
+    -------
+    list of (Path, Path)
+        The CSV and sidecar paths, session by session.
+    """
+    return [write_record(rec, path, time=time)
+            for rec, path in zip(records, session_paths(path_csv, len(records)))]

@@ -7,7 +7,9 @@ plus a room cycle.  Temperature-driven effects then read that column.
 * :class:`WarmUp` -- exponential warm-up of the sensor after power-on;
 * :class:`StepProfile` -- held levels with a first-order lag: thermal-chamber
   steps from -30 to +60 C (seed 001) or rate-table steps (seed 000 Fig. 4.7);
-* :class:`RoomCycle` -- slow periodic room temperature cycle.
+* :class:`RoomCycle` -- slow periodic room temperature cycle;
+* :class:`Sweep` -- slow piecewise-linear sweeps with flat stretches (a day-long
+  session warming from 5 C, held, cooled...).
 """
 
 from __future__ import annotations
@@ -131,4 +133,40 @@ class RoomCycle(Source):
             "phase_rad": self.phase_rad,
             "formula": "mean + amplitude*sin(2*pi*t/period_s + phase_rad)",
             "units": {"amplitude": units, "mean": units, "period_s": "s", "phase_rad": "rad"},
+        }
+
+
+@dataclass(frozen=True)
+class Sweep(Source):
+    """Piecewise-linear path through the knots ``(times_s[i], levels[i])``.
+
+    Linear between knots, held at the first level before the first knot and at the
+    last after the last one; two knots at one level make a flat stretch.
+
+    Parameters
+    ----------
+    times_s : sequence of float
+        Knot times in seconds, strictly increasing.
+    levels : sequence of float
+        The column's value at each knot.
+    """
+
+    times_s: tuple[float, ...]
+    levels: tuple[float, ...]
+    kind: ClassVar[str] = "sweep"
+
+    def __post_init__(self):
+        object.__setattr__(self, "times_s", as_float_tuple(self.times_s, "times_s"))
+        object.__setattr__(self, "levels", as_float_tuple(self.levels, "levels"))
+        if len(self.times_s) != len(self.levels) or np.any(np.diff(self.times_s) <= 0):
+            raise ValueError(f"{self.label}: need strictly increasing times_s, one level each")
+
+    def generate(self, n, rate, rng, inputs=None):
+        return np.interp(np.arange(n) / rate, self.times_s, self.levels)
+
+    def params(self, rate, units, out):
+        return {
+            "knots": [{"time_s": t, "level": v} for t, v in zip(self.times_s, self.levels)],
+            "formula": "linear between the knots, held before the first and after the last",
+            "units": {"time_s": "s", "level": units},
         }

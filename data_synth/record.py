@@ -3,8 +3,8 @@
 :func:`compose` draws every source from its own random stream (keyed by the
 seed and the source name, so adding a source never changes the others),
 generates auxiliary columns before the sources that read them, sums the
-components per column, quantizes the target if asked, and assembles the ground
-truth (see :data:`TRUTH_CONVENTIONS`).
+components per column, quantizes the columns asked (after every source has
+read its inputs), and assembles the ground truth (see :data:`TRUTH_CONVENTIONS`).
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from data_synth.arrays import ARRAY_SOURCES
 from data_synth.base import Source, check_column_name
 from data_synth.effects import Quantizer
 from data_synth.terms import exact_model, terms_json
@@ -37,6 +38,18 @@ TRUTH_CONVENTIONS = {
     "quantization).",
     "declared": "false marks an effect the fit is not told about; the data file never names "
     "any effect either way, auxiliary columns are plain named columns.",
+    "quantization": "applied to a column once every source has been generated: a source that "
+    "reads a column (a temperature bias) reads the quantity itself, the file holds its "
+    "quantized read-out.",
+    "constants": "per column, the sum of its components that are one constant over the record "
+    "(fixed bias, turn-on bias, gravity and earth rate of a static orientation), with their "
+    "names; other components keep their own mean (a temperature polynomial's coefs[0], a "
+    "random walk's start).",
+    "cross_covariance": "per group of columns drawn together, the per-sample covariance at "
+    "equal times of the sum of their correlated stationary components (white noise, "
+    "Gauss-Markov; each source's own matrix is its params.covariance, a Gauss-Markov one "
+    "decays as phi^|k| with the lag k). Components drawn per column are independent across "
+    "columns and not in it; no column enters another's error.",
 }
 
 
@@ -104,8 +117,10 @@ def compose(
     units: str = "deg/s",
     column_units: Mapping[str, str] | None = None,
     quantizer: Quantizer | None = None,
+    quantizers: Mapping[str, Quantizer] | None = None,
     scenario: str = "custom",
     description: str = "",
+    extra_truth: Mapping[str, Any] | None = None,
 ) -> SynthRecord:
     """Generate a record from additive sources.
 
@@ -126,8 +141,13 @@ def compose(
         Unit of every other column (e.g. ``{"temp_c": "degC"}``).
     quantizer : Quantizer, optional
         Quantization of the target, applied to the sum of its components.
+    quantizers : mapping of str to Quantizer, optional
+        Quantization of any column by name (the target too, if ``quantizer`` is not
+        given), applied after every source has been generated.
     scenario, description : str
         Recorded in the truth.
+    extra_truth : mapping, optional
+        More entries of the truth (an orientation, a session), under keys of their own.
 
     Returns
     -------
@@ -150,16 +170,19 @@ def compose(
     missing = [c for c in order if c not in col_units]
     if missing:
         raise ValueError(f"give the units of {missing} in column_units")
+    quantized = _quantizers(quantizer, quantizers, target, order)
 
     values, outs = _generate(sources, n, rate, seed, target, order)
     truth_sources = [_source_truth(s, outs[s.label], rate, target, col_units) for s in sources]
-    model = None
-    if quantizer is not None:
-        raw = values[target]
-        values[target] = quantizer.apply(raw)
-        truth_sources.append(_quantizer_truth(quantizer, values[target] - raw, target, units))
-    else:
-        model = _model(sources, outs, rate, target, units)
+    for column, q in quantized.items():
+        raw = values[column]
+        values[column] = q.apply(raw)
+        truth_sources.append(_quantizer_truth(q, values[column] - raw, column, target,
+                                              col_units[column]))
+    model = None if target in quantized else _model(sources, outs, rate, target, units)
+    columns = _columns_truth(sources, order, target, col_units)
+    for column, q in quantized.items():
+        columns[column]["lsb"] = q.lsb
     truth = {
         "scenario": scenario,
         "description": description,
@@ -169,12 +192,35 @@ def compose(
         "n_samples": n,
         "target": target,
         "units": units,
-        "columns": _columns_truth(sources, order, target, col_units),
+        "columns": columns,
         "sources": truth_sources,
         "model": model,
-        "conventions": dict(TRUTH_CONVENTIONS),
     }
+    constants = _constants(sources, outs, target)
+    if constants:
+        truth["constants"] = constants
+    cross = _cross_covariance(sources, rate, col_units)
+    if cross:
+        truth["cross_covariance"] = cross
+    truth["conventions"] = dict(TRUTH_CONVENTIONS)
+    clash = sorted(set(extra_truth or {}) & set(truth))
+    if clash:
+        raise ValueError(f"extra_truth may not replace the truth's own entries {clash}")
+    truth.update(extra_truth or {})
     return SynthRecord({c: values[c] for c in order}, float(rate), target, truth)
+
+
+def _quantizers(quantizer, quantizers, target, order) -> dict[str, Quantizer]:
+    """The quantizer of each column: ``quantizer`` for the target, ``quantizers`` by name."""
+    out = dict(quantizers or {})
+    if quantizer is not None:
+        if target in out:
+            raise ValueError(f"the target {target!r} has a quantizer and an entry in quantizers")
+        out = {target: quantizer, **out}
+    unknown = sorted(set(out) - set(order))
+    if unknown:
+        raise ValueError(f"quantizers name columns the record does not have: {unknown}")
+    return out
 
 
 def _generate(sources, n, rate, seed, target, order):
@@ -220,7 +266,7 @@ def _columns_truth(sources, order, target, col_units) -> dict[str, dict[str, Any
         "time": {"units": "s", "role": "time", "note": "n/rate_hz; written first when requested"}
     }
     for c in order:
-        users = [s for s in sources if c in s.requires and target in s.outputs(target)]
+        users = [s for s in sources if c in s.requires]
         role = "target" if c == target else ("input" if users else "auxiliary")
         info[c] = {
             "units": col_units[c],
@@ -233,17 +279,47 @@ def _columns_truth(sources, order, target, col_units) -> dict[str, dict[str, Any
     return info
 
 
-def _quantizer_truth(quantizer, error, target, units) -> dict[str, Any]:
+def _quantizer_truth(quantizer, error, column, target, units) -> dict[str, Any]:
     return {
         "kind": quantizer.kind,
-        "name": quantizer.kind,
+        "name": quantizer.kind if column == target else f"{column}_{quantizer.kind}",
         "declared": True,
         "params": quantizer.params(units),
         "terms": None,
         "innovation_std": None,
         "component_std": float(np.std(error)),
-        "channel": target,
+        "channel": column,
     }
+
+
+def _constants(sources, outs, target) -> dict[str, dict[str, Any]]:
+    """Per column, the sum of its constant components and their names."""
+    out: dict[str, dict[str, Any]] = {}
+    for s in sources:
+        if s.constant:
+            (column,) = s.outputs(target)
+            entry = out.setdefault(column, {"value": 0.0, "sources": []})
+            entry["value"] += float(outs[s.label][0])
+            entry["sources"].append(s.label)
+    return out
+
+
+def _cross_covariance(sources, rate, col_units) -> list[dict[str, Any]]:
+    """Per group of columns, the summed equal-time covariance of its stationary array sources."""
+    groups: dict[tuple[str, ...], dict[str, Any]] = {}
+    for src in sources:
+        if not isinstance(src, ARRAY_SOURCES) or src.covariance(rate) is None:
+            continue
+        units = {col_units[c] for c in src.channels}
+        group = groups.setdefault(src.channels, {
+            "channels": list(src.channels),
+            "covariance": 0.0,
+            "sources": [],
+            "units": f"({units.pop()})^2" if len(units) == 1 else "products of the column units",
+        })
+        group["covariance"] = group["covariance"] + src.covariance(rate)
+        group["sources"].append(src.label)
+    return [{**g, "covariance": g["covariance"].tolist()} for g in groups.values()]
 
 
 def _model(sources, outs, rate, target, units) -> dict[str, Any] | None:

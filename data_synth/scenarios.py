@@ -27,9 +27,11 @@ few per cent of the signal variance).
 from __future__ import annotations
 
 import inspect
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 from data_synth.arrays import CorrelatedRandomWalk, CorrelatedWhiteNoise
 from data_synth.effects import (
@@ -41,6 +43,27 @@ from data_synth.effects import (
     ScaleFactorError,
     TemperatureBias,
     Vibration,
+)
+from data_synth.imu import (
+    ACCEL_CORR,
+    ACCEL_LSB,
+    DAY_SWEEP,
+    GYRO_CORR,
+    GYRO_LSB,
+    IMU_ACCEL_B,
+    IMU_ACCEL_K,
+    IMU_ACCEL_VRW,
+    IMU_GYRO_ARW,
+    IMU_GYRO_B,
+    IMU_GYRO_K,
+    LAG_S,
+    SESSION_ORIENTATIONS,
+    SESSION_SWEEPS,
+    T_REF_C,
+    TEMP_LSB,
+    companion_spec,
+    sessions_spec,
+    sweep_spec,
 )
 from data_synth.profiles import CHAMBER_LEVELS_C, StepProfile, WarmUp
 from data_synth.record import SynthRecord, compose
@@ -91,27 +114,34 @@ class Scenario:
 
     ``build(**params)`` returns the keyword arguments of
     :func:`~data_synth.record.compose` other than duration, rate, seed and
-    names (``sources``, ``target``, ``units``...); a builder that declares a
-    ``duration`` parameter receives the record length.
+    names (``sources``, ``target``, ``units``...), or for a scenario of several
+    sessions a list of them, one per session; a builder that declares a
+    ``duration`` parameter receives the record length.  ``fixed`` holds the
+    builder parameters this preset sets for good (a control's absent effect).
     """
 
     name: str
     description: str
     duration: float
     rate: float
-    build: Callable[..., dict[str, Any]]
+    build: Callable[..., Any]
+    sessions: int = 1
+    fixed: Mapping[str, Any] = field(default_factory=dict)
 
     def parameters(self) -> list[str]:
         """Names of the parameters a caller may override."""
-        return [p for p in inspect.signature(self.build).parameters if p != "duration"]
+        return [p for p in inspect.signature(self.build).parameters
+                if p != "duration" and p not in self.fixed]
 
 
 SCENARIOS: dict[str, Scenario] = {}
 
 
-def _register(name: str, duration: float, rate: float, description: str):
+def _register(name: str, duration: float, rate: float, description: str, *, sessions: int = 1,
+              fixed: Mapping[str, Any] | None = None):
     def deco(fn):
-        SCENARIOS[name] = Scenario(name, description, duration, rate, fn)
+        SCENARIOS[name] = Scenario(name, description, duration, rate, fn, sessions,
+                                   dict(fixed or {}))
         return fn
 
     return deco
@@ -120,6 +150,13 @@ def _register(name: str, duration: float, rate: float, description: str):
 def list_scenarios() -> dict[str, str]:
     """Scenario names with their one-line descriptions."""
     return {name: s.description for name, s in SCENARIOS.items()}
+
+
+def session_seed(seed: int, index: int) -> int:
+    """The compose seed of session ``index`` (0-based) of a multi-session record drawn with
+    ``seed``: ``SeedSequence([seed, index])``'s first word, so sessions draw independently and
+    a control drawn with the same seed draws the same noise."""
+    return int(np.random.SeedSequence([seed, index]).generate_state(1)[0])
 
 
 def make_scenario(
@@ -135,7 +172,7 @@ def make_scenario(
     Parameters
     ----------
     name : str
-        A key of :func:`list_scenarios`.
+        A key of :func:`list_scenarios` with one session (see :func:`make_sessions`).
     duration, rate : float, optional
         Seconds and Hz; None keeps the scenario's default.
     seed : int
@@ -147,8 +184,88 @@ def make_scenario(
     Raises
     ------
     fosmodel.core.exceptions.InputError
+        Unknown scenario or parameter, a scenario of several sessions, or values that
+        cannot be used.
+    """
+    sc = _scenario(name, overrides)
+    if sc.sessions > 1:
+        raise InputError(f"scenario {name!r} has {sc.sessions} sessions: make them with "
+                         "make_sessions (fosmodel synth writes one file per session)")
+    duration = sc.duration if duration is None else duration
+    rate = sc.rate if rate is None else rate
+    try:
+        spec = sc.build(**_arguments(sc, duration, overrides))
+        return compose(duration=duration, rate=rate, seed=seed, scenario=name,
+                       description=sc.description, **spec)
+    except ValueError as exc:
+        raise InputError(f"scenario {name!r}: {exc}") from exc
+
+
+def make_sessions(
+    name: str,
+    *,
+    duration: float | None = None,
+    rate: float | None = None,
+    seed: int = 0,
+    **overrides: Any,
+) -> list[SynthRecord]:
+    """Generate every session of a named scenario: records of one sensor.
+
+    Each session is drawn with its own seed (:func:`session_seed`), so the sessions'
+    noises and turn-on biases are independent, and the same ``seed`` gives a control
+    the same draws.  Each record's truth adds ``session`` (``index`` from 1,
+    ``count``, ``label`` ``s1``..., the ``group_seed``) and ``shared``: what every
+    session has in common, the temperature bias of each driven column
+    (``{column: {"coefs", "t_ref_c", "raw_coefs", "lag_s", "input"}}``, empty for a
+    control).  A one-session scenario gives ``[make_scenario(...)]``.
+
+    Parameters
+    ----------
+    name : str
+        A key of :func:`list_scenarios`.
+    duration, rate : float, optional
+        Seconds and Hz of each session; None keeps the scenario's default.
+    seed : int
+        Non-negative seed.
+    **overrides
+        Scenario parameters; see :meth:`Scenario.parameters`.
+
+    Returns
+    -------
+    list of SynthRecord
+        The sessions in order.
+
+    Raises
+    ------
+    fosmodel.core.exceptions.InputError
         Unknown scenario or parameter, or values that cannot be used.
     """
+    sc = _scenario(name, overrides)
+    if sc.sessions == 1:
+        return [make_scenario(name, duration=duration, rate=rate, seed=seed, **overrides)]
+    if not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed must be a non-negative integer, got {seed!r}")
+    duration = sc.duration if duration is None else duration
+    rate = sc.rate if rate is None else rate
+    try:
+        specs = sc.build(**_arguments(sc, duration, overrides))
+        records = []
+        for index, spec in enumerate(specs):
+            session = {"index": index + 1, "count": len(specs), "label": f"s{index + 1}",
+                       "group_seed": int(seed)}
+            extra = {**spec.pop("extra_truth", {}), "session": session}
+            records.append(compose(duration=duration, rate=rate, seed=session_seed(seed, index),
+                                   scenario=name, description=sc.description, extra_truth=extra,
+                                   **spec))
+    except ValueError as exc:
+        raise InputError(f"scenario {name!r}: {exc}") from exc
+    shared = {"temperature_bias": _temperature_biases(records[0].truth)}
+    for rec in records:
+        rec.truth["shared"] = shared
+    return records
+
+
+def _scenario(name: str, overrides: Mapping[str, Any]) -> Scenario:
     if name not in SCENARIOS:
         raise InputError(f"unknown scenario {name!r}; choose from {', '.join(SCENARIOS)}")
     sc = SCENARIOS[name]
@@ -157,22 +274,22 @@ def make_scenario(
         raise InputError(
             f"scenario {name!r} has no parameter {unknown}; it takes {sc.parameters()}"
         )
-    duration = sc.duration if duration is None else duration
-    rate = sc.rate if rate is None else rate
-    try:
-        if "duration" in inspect.signature(sc.build).parameters:
-            overrides["duration"] = duration
-        spec = sc.build(**overrides)
-        return compose(
-            duration=duration,
-            rate=rate,
-            seed=seed,
-            scenario=name,
-            description=sc.description,
-            **spec,
-        )
-    except ValueError as exc:
-        raise InputError(f"scenario {name!r}: {exc}") from exc
+    return sc
+
+
+def _arguments(sc: Scenario, duration: float, overrides: Mapping[str, Any]) -> dict[str, Any]:
+    """The builder's arguments: the overrides, the fixed values and, if it asks, the duration."""
+    args = {**overrides, **sc.fixed}
+    if "duration" in inspect.signature(sc.build).parameters:
+        args["duration"] = duration
+    return args
+
+
+def _temperature_biases(truth: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+    """The temperature bias of each column, as the truth of its source gives it."""
+    keys = ("input", "t_ref_c", "coefs", "raw_coefs", "lag_s")
+    return {s["channel"]: {k: s["params"][k] for k in keys}
+            for s in truth["sources"] if s["kind"] == "temperature_bias"}
 
 
 # --- paper-like records (seed 002) --------------------------------------------------------
@@ -247,15 +364,7 @@ def _gyro_array_8(units="deg/s", rho_arw=0.0, rho_rrw=0.0, typical=False):
 
 # --- a static six-axis IMU ------------------------------------------------------------------
 
-#: Per axis: gyro ARW (deg/sqrt(h)) and accelerometer VRW (m/s/sqrt(h)) around the ADIS16405
-#: datasheet's 2 and 0.2, a little apart so that the axes differ (design choice).
-IMU_GYRO_ARW = {"gx_dps": 2.0, "gy_dps": 2.2, "gz_dps": 1.9}
-IMU_ACCEL_VRW = {"ax_mps2": 0.20, "ay_mps2": 0.22, "az_mps2": 0.25}
-#: Bias instability B: the datasheet's in-run stability (0.007 deg/s, 0.2 mg) is the Allan
-#: floor, 0.664 B.  Rate random walk K: about what the ADIS16405 sessions show (150 deg/h/sqrt(h)
-#: = 7e-4 deg/s/sqrt(s); 90 m/s/h/sqrt(h) = 4.2e-4 m/s^2/sqrt(s)).
-IMU_GYRO_B, IMU_GYRO_K = 0.007 / 0.664, 7e-4
-IMU_ACCEL_B, IMU_ACCEL_K = mg_to_mps2(0.2) / 0.664, 4.2e-4
+# The ADIS16405-like levels (IMU_GYRO_ARW...) are in data_synth.imu, shared with companion_noise.
 
 
 @_register(
@@ -577,3 +686,51 @@ def _slow_random_walk_temperature():
 def _slow_warmup_drift_temperature():
     return _slow(Drift(1.2, 0.2, 300.0, declared=False, name="drift"), *_switched_temperature(),
                  temp_c="degC")
+
+
+# --- six-axis records of one sensor: temperature sweeps, sessions, shared noise ---------------
+
+DAY, SWEEP_RATE = 86_400.0, 1.0
+
+
+@_register("temperature_sweep", DAY, SWEEP_RATE,
+           "Six-axis IMU + temp_c, 1 Hz, one day: 5->20 C, held, ->8 C; undeclared bias "
+           "polynomial in temp_c on gx_dps and ax_mps2; coarse LSBs")
+def _temperature_sweep(duration, sweep=DAY_SWEEP, orientation="+z/+x", sensitivity=None,
+                       t_ref_c=T_REF_C, lag_s=0.0, gyro_lsb=GYRO_LSB, accel_lsb=ACCEL_LSB,
+                       temp_lsb=TEMP_LSB):
+    return sweep_spec(duration, sweep=sweep, orientation=orientation, sensitivity=sensitivity,
+                      t_ref_c=t_ref_c, lag_s=lag_s, gyro_lsb=gyro_lsb, accel_lsb=accel_lsb,
+                      temp_lsb=temp_lsb)
+
+
+_register("temperature_sweep_lag", DAY, SWEEP_RATE,
+          "temperature_sweep with a 30 min thermal lag between temp_c and the driven biases",
+          fixed={"lag_s": LAG_S})(_temperature_sweep)
+_register("temperature_sweep_control", DAY, SWEEP_RATE,
+          "Control: temperature_sweep without the temperature effect (same draws per seed)",
+          fixed={"sensitivity": {}})(_temperature_sweep)
+
+
+@_register("temperature_sessions", DAY, SWEEP_RATE,
+           "3 sessions of one six-axis IMU, 1 Hz, a day each, another axis up each: sweeps from "
+           "5 C to 16-24 C (the first flat for half), shared temp_c bias on gx_dps, ax_mps2",
+           sessions=3)
+def _temperature_sessions(duration, sweeps=SESSION_SWEEPS, orientations=SESSION_ORIENTATIONS,
+                          sensitivity=None, t_ref_c=T_REF_C, lag_s=0.0, gyro_lsb=GYRO_LSB,
+                          accel_lsb=ACCEL_LSB, temp_lsb=TEMP_LSB):
+    return sessions_spec(duration, sweeps=sweeps, orientations=orientations,
+                         sensitivity=sensitivity, t_ref_c=t_ref_c, lag_s=lag_s,
+                         gyro_lsb=gyro_lsb, accel_lsb=accel_lsb, temp_lsb=temp_lsb)
+
+
+_register("temperature_sessions_control", DAY, SWEEP_RATE,
+          "Control: temperature_sessions without the temperature effect (same draws per seed)",
+          sessions=3, fixed={"sensitivity": {}})(_temperature_sessions)
+
+
+@_register("companion_noise", 3600.0, 100.0,
+           "Six-axis IMU whose gyros share part of their white noise and a fast 0.2 s error, "
+           "and so do its accelerometers (known covariance); no axis enters another")
+def _companion_noise(gyro_corr=GYRO_CORR, accel_corr=ACCEL_CORR, fast=True):
+    return companion_spec(gyro_corr=gyro_corr, accel_corr=accel_corr, fast=fast)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from data_synth.arrays import (
+    CorrelatedGaussMarkov,
     CorrelatedRandomWalk,
     CorrelatedWhiteNoise,
     correlated_normal,
@@ -69,3 +70,50 @@ def test_array_sources_validate_channels():
         CorrelatedWhiteNoise(("g1", "y"), [0.1], 0.0)
     with pytest.raises(ValueError):
         CorrelatedWhiteNoise(("g1", "g2"), [0.1, 0.2, 0.3], 0.0)
+
+
+AXES = ("gx_dps", "gy_dps", "gz_dps")
+CORR = [[1.0, 0.4, -0.2], [0.4, 1.0, 0.3], [-0.2, 0.3, 1.0]]
+
+
+def _cross_tol(cov, k_sum):
+    """Z standard errors of sample cross-covariances: sqrt((s_ii s_jj + s_ij^2) k_sum / n)
+    per sample, ``k_sum`` the sum over lags of the product of the autocorrelations."""
+    d = np.diag(cov)
+    return Z * np.sqrt((np.outer(d, d) + cov**2) * k_sum)
+
+
+def test_correlated_white_noise_gives_its_per_sample_covariance():
+    rate, n = 100.0, 200_000
+    src = CorrelatedWhiteNoise(AXES, (0.033, 0.037, 0.032), CORR)
+    cov = np.array(src.covariance(rate))
+    sigma = np.array([0.033, 0.037, 0.032]) * 10.0
+    np.testing.assert_allclose(cov, np.array(CORR) * np.outer(sigma, sigma), rtol=1e-12)
+    x = src.generate(n, rate, source_rng(3, "w"))
+    assert np.all(np.abs(np.cov(x.T) - cov) < _cross_tol(cov, 1.0) / math.sqrt(n))
+    assert src.truth(rate, "deg/s", x)["params"]["covariance"] == cov.tolist()
+    assert CorrelatedRandomWalk(AXES, (1e-4,), 0.2).covariance(rate) is None  # not stationary
+
+
+def test_correlated_gauss_markov_cross_covariance_at_lags_and_stationary_start():
+    rate, n, tau = 100.0, 400_000, 0.2
+    sigmas = (0.1, 0.2, 0.05)
+    src = CorrelatedGaussMarkov(AXES, sigmas, tau, CORR)
+    phi = math.exp(-1 / (rate * tau))
+    assert src.phi(rate) == pytest.approx(phi)
+    cov = src.covariance(rate)
+    np.testing.assert_allclose(cov, np.array(CORR) * np.outer(sigmas, sigmas), rtol=1e-12)
+    x = src.generate(n, rate, source_rng(4, "gm"))
+    tol = _cross_tol(cov, (1 + phi**2) / (1 - phi**2)) / math.sqrt(n)
+    for k in (0, 5, 20):  # cov(x_i[m], x_j[m-k]) = cov_ij phi^k
+        est = (x[k:].T @ x[: n - k]) / (n - k)
+        assert np.all(np.abs(est - cov * phi**k) < tol)
+    # the first sample is drawn from the stationary law: no warm-up transient
+    firsts = np.array([src.generate(2, rate, source_rng(s, "gm"))[0] for s in range(3000)])
+    assert np.all(np.abs(firsts.std(axis=0) / sigmas - 1) < Z / math.sqrt(2 * 3000))
+    t = src.truth(rate, "deg/s", x)
+    assert t["params"]["covariance"] == cov.tolist() and t["params"]["tau_s"] == tau
+    with pytest.raises(ValueError, match="tau_s"):
+        CorrelatedGaussMarkov(AXES, sigmas, 0.0, CORR)
+    with pytest.raises(ValueError, match="symmetric"):
+        CorrelatedGaussMarkov(AXES, sigmas, tau, [[1.0, 0.2], [0.2, 1.0]])

@@ -75,6 +75,25 @@ def test_temperature_bias_terms_equal_the_polynomial():
     assert t["params"]["raw_coefs"] == pytest.approx([0.2813 - 0.15 + 0.0625, 0.001, 1e-4])
 
 
+def test_temperature_bias_through_a_thermal_lag():
+    rate, lag, slope = 1.0, 1800.0, 1.0 / 3600  # a 1 C/h ramp after a flat hour
+    temp = 5.0 + slope * np.maximum(np.arange(36_000) - 3600.0, 0.0)
+    src = TemperatureBias((0.0, 0.004, 1.5e-4), t_ref_c=15.0, lag_s=lag)
+    sensor = src.sensor_temperature(temp, rate)
+    assert np.all(sensor[:3601] == 5.0)  # settled at the first sample: flat while it is flat
+    phi = math.exp(-1 / (rate * lag))
+    offset = slope * phi / (1 - phi)  # the exact steady lag of a first-order filter on a ramp
+    assert offset == pytest.approx(slope * lag, rel=1e-3)
+    assert temp[-1] - sensor[-1] == pytest.approx(offset, rel=1e-6)
+    x = src.generate(len(temp), rate, RNG, {"temp_c": temp})
+    np.testing.assert_allclose(x, 0.004 * (sensor - 15) + 1.5e-4 * (sensor - 15) ** 2)
+    t = src.truth(rate, "deg/s", x)
+    assert t["terms"] is None and t["params"]["lag_s"] == lag
+    assert TemperatureBias((0.0, 0.01)).truth(rate, "deg/s", x)["params"]["lag_s"] == 0.0
+    with pytest.raises(ValueError, match="lag_s"):
+        TemperatureBias((0.0, 0.01), lag_s=-1.0)
+
+
 def test_vibration_frequency_amplitude_phase_and_grid_position():
     rate, n = 100.0, 30_000
     src = Vibration(7.3137, (0.1, 0.02), (0.7, -1.0))

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from data_synth.profiles import CHAMBER_LEVELS_C, RoomCycle, StepProfile, WarmUp
+from data_synth.profiles import CHAMBER_LEVELS_C, RoomCycle, StepProfile, Sweep, WarmUp
 from data_synth.record import source_rng
 
 RNG = source_rng(0, "profiles")
@@ -49,3 +49,16 @@ def test_room_cycle_period():
     assert x[60_000] == pytest.approx(21.0, abs=1e-9) and x[45_000] == pytest.approx(19.0)
     with pytest.raises(ValueError):
         RoomCycle(1.0, 0.0)
+
+
+def test_sweep_is_linear_between_knots_and_flat_outside_and_on_equal_levels():
+    src = Sweep((100.0, 200.0, 400.0), (5.0, 5.0, 25.0))
+    x = src.generate(600, 1.0, RNG)
+    assert np.all(x[:201] == 5.0) and np.all(x[400:] == 25.0)
+    np.testing.assert_allclose(x[200:401], 5.0 + 0.1 * np.arange(201))
+    knots = src.truth(1.0, "degC", x)["params"]["knots"]
+    assert knots[2] == {"time_s": 400.0, "level": 25.0}
+    with pytest.raises(ValueError, match="increasing"):
+        Sweep((0.0, 0.0), (1.0, 2.0))
+    with pytest.raises(ValueError, match="one level each"):
+        Sweep((0.0, 1.0), (1.0,))

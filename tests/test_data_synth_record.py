@@ -5,8 +5,16 @@ import json
 import numpy as np
 import pytest
 
-from data_synth.effects import AuxInput, ConstantBias, Quantizer, TemperatureBias, Vibration
-from data_synth.profiles import WarmUp
+from data_synth.arrays import CorrelatedGaussMarkov, CorrelatedWhiteNoise
+from data_synth.effects import (
+    AuxInput,
+    ConstantBias,
+    Quantizer,
+    TemperatureBias,
+    TurnOnBias,
+    Vibration,
+)
+from data_synth.profiles import Sweep, WarmUp
 from data_synth.record import SynthRecord, compose, sample_count, source_rng
 from data_synth.sources import GaussMarkov, WhiteNoise
 from data_synth.terms import evaluate
@@ -116,6 +124,55 @@ def test_quantized_target_has_no_exact_model():
         "innovation_std": 0.5,
         "units": {"innovation_std": "deg/s"},
     }
+
+
+def test_columns_are_quantized_after_their_users_read_them():
+    rec = compose(
+        [Sweep((0.0, 100.0), (5.0, 20.0), channel="temp_c"),
+         TemperatureBias((0.0, 0.004, 1.5e-4), t_ref_c=15.0)],
+        duration=100.0, rate=1.0, target="gx_dps", column_units={"temp_c": "degC"},
+        quantizers={"temp_c": Quantizer(0.5), "gx_dps": Quantizer(0.001)},
+    )
+    temp = np.interp(np.arange(100.0), [0, 100], [5, 20])  # the temperature itself
+    np.testing.assert_array_equal(rec.columns["temp_c"], 0.5 * np.round(temp / 0.5))
+    bias = 0.004 * (temp - 15) + 1.5e-4 * (temp - 15) ** 2  # read before the quantization
+    np.testing.assert_allclose(rec.columns["gx_dps"], 0.001 * np.round(bias / 0.001), atol=1e-15)
+    q = {s["name"]: s for s in rec.truth["sources"] if s["kind"] == "quantization"}
+    assert q["quantization"]["channel"] == "gx_dps" and q["quantization"]["params"]["lsb"] == 0.001
+    assert q["temp_c_quantization"]["channel"] == "temp_c"
+    assert rec.truth["columns"]["temp_c"]["lsb"] == 0.5 and rec.truth["model"] is None
+    with pytest.raises(ValueError, match="does not have"):
+        compose([ConstantBias(1.0)], duration=2.0, rate=1.0, quantizers={"temp_c": Quantizer(1)})
+    with pytest.raises(ValueError, match="a quantizer and an entry"):
+        compose([ConstantBias(1.0)], duration=2.0, rate=1.0, quantizer=Quantizer(1),
+                quantizers={"gyro_y": Quantizer(1)})
+
+
+def test_constants_cross_covariance_and_extra_truth():
+    axes = ("gx_dps", "gy_dps")
+    rec = compose(
+        [ConstantBias(0.3, name="bias"), TurnOnBias(0.1, name="turn_on"),
+         TurnOnBias(0.1, channel="gy_dps", name="gy_turn_on"),
+         CorrelatedWhiteNoise(axes, (0.01, 0.02), 0.5, name="white"),
+         CorrelatedGaussMarkov(axes, (0.1, 0.1), 2.0, -0.2, name="fast")],
+        duration=10.0, rate=4.0, target="gx_dps", column_units={"gy_dps": "deg/s"},
+        extra_truth={"orientation": {"up": "+z"}},
+    )
+    constants = rec.truth["constants"]
+    turn_on = [s for s in rec.truth["sources"] if s["name"] == "turn_on"][0]["params"]["value"]
+    assert constants["gx_dps"] == {"value": pytest.approx(0.3 + turn_on),
+                                   "sources": ["bias", "turn_on"]}
+    assert constants["gy_dps"]["sources"] == ["gy_turn_on"]
+    (cross,) = rec.truth["cross_covariance"]
+    sigma = np.array([0.01, 0.02]) * 2.0  # density * sqrt(4 Hz)
+    expected = np.array([[1, 0.5], [0.5, 1]]) * np.outer(sigma, sigma) + np.array(
+        [[1, -0.2], [-0.2, 1]]) * 0.01
+    np.testing.assert_allclose(cross["covariance"], expected, rtol=1e-12)
+    assert cross["channels"] == list(axes) and cross["sources"] == ["white", "fast"]
+    assert cross["units"] == "(deg/s)^2" and rec.truth["orientation"] == {"up": "+z"}
+    assert "constants" not in compose([WhiteNoise(0.1)], duration=1.0, rate=10.0).truth
+    with pytest.raises(ValueError, match="may not replace"):
+        compose([WhiteNoise(0.1)], duration=1.0, rate=10.0, extra_truth={"seed": 3})
 
 
 def test_inputs_are_generated_before_their_users_whatever_the_order():

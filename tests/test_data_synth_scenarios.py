@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from data_synth import list_scenarios, make_scenario
-from data_synth.scenarios import SCENARIOS
+from data_synth import list_scenarios, make_scenario, make_sessions
+from data_synth.scenarios import SCENARIOS, session_seed
 from data_synth.terms import evaluate
 from fosmodel.core.exceptions import InputError
 
@@ -30,6 +30,12 @@ REQUIRED = {
     "clean",
     "unrelated_temperature",
     "temperature_and_vibration",
+    "temperature_sweep",
+    "temperature_sweep_lag",
+    "temperature_sweep_control",
+    "temperature_sessions",
+    "temperature_sessions_control",
+    "companion_noise",
 }
 IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 # scenario -> (names of its undeclared sources, extra columns after the target)
@@ -58,18 +64,21 @@ def test_list_scenarios_names_and_descriptions():
 
 @pytest.mark.parametrize("name", sorted(SCENARIOS))
 def test_every_scenario_builds_with_a_complete_truth(name):
-    rec = make_scenario(name, duration=20.0, seed=1)
-    t = json.loads(json.dumps(rec.truth, allow_nan=False))
-    assert t["scenario"] == name and t["seed"] == 1 and t["duration_s"] == 20.0
-    assert t["rate_hz"] == SCENARIOS[name].rate and t["n_samples"] == rec.n_samples
-    assert list(rec.columns)[0] == rec.target == t["target"]
-    for col, values in rec.columns.items():
-        assert IDENT.match(col) and col not in ("y", "time")
-        assert values.dtype == np.float64 and np.all(np.isfinite(values))
-        assert t["columns"][col]["units"]
-    for s in t["sources"]:
-        assert isinstance(s["declared"], bool) and s["kind"] and "units" in s["params"]
-        assert s["terms"] is None or all(set(d) == {"term", "coef"} for d in s["terms"])
+    records = make_sessions(name, duration=20.0, seed=1)
+    assert len(records) == SCENARIOS[name].sessions
+    for k, rec in enumerate(records):
+        t = json.loads(json.dumps(rec.truth, allow_nan=False))
+        seed = 1 if len(records) == 1 else session_seed(1, k)
+        assert t["scenario"] == name and t["seed"] == seed and t["duration_s"] == 20.0
+        assert t["rate_hz"] == SCENARIOS[name].rate and t["n_samples"] == rec.n_samples
+        assert list(rec.columns)[0] == rec.target == t["target"]
+        for col, values in rec.columns.items():
+            assert IDENT.match(col) and col not in ("y", "time")
+            assert values.dtype == np.float64 and np.all(np.isfinite(values))
+            assert t["columns"][col]["units"]
+        for s in t["sources"]:
+            assert isinstance(s["declared"], bool) and s["kind"] and "units" in s["params"]
+            assert s["terms"] is None or all(set(d) == {"term", "coef"} for d in s["terms"])
 
 
 def test_defaults_of_the_paper_records():
@@ -358,3 +367,56 @@ def test_the_temperature_really_drives_the_bias(name):
     means = temp.reshape(12, -1).mean(axis=1)
     assert 22.9 < temp.min() and temp.max() < 29.1
     assert abs(np.corrcoef(np.arange(12), means)[0, 1]) < 0.3
+
+
+# -- scenarios of several sessions ------------------------------------------------------------
+
+
+def test_sessions_draw_independently_and_a_control_draws_the_same():
+    a = make_sessions("temperature_sessions", seed=4, duration=600.0)
+    b = make_sessions("temperature_sessions", seed=4, duration=600.0)
+    ctl = make_sessions("temperature_sessions_control", seed=4, duration=600.0)
+    assert [r.truth for r in a] == [r.truth for r in b]
+    seeds = [r.truth["seed"] for r in a]
+    assert len(set(seeds)) == 3 and seeds == [session_seed(4, k) for k in range(3)]
+    assert [r.truth["seed"] for r in ctl] == seeds
+    for r, c in zip(a, ctl):  # gy_dps is not driven: the very same values
+        np.testing.assert_array_equal(r.columns["gy_dps"], c.columns["gy_dps"])
+    white = [r.columns["gy_dps"] - r.columns["gy_dps"].mean() for r in a]
+    assert abs(np.corrcoef(white[0], white[1])[0, 1]) < Z / math.sqrt(600)
+    other = make_sessions("temperature_sessions", seed=5, duration=600.0)
+    assert not np.array_equal(other[0].columns["gy_dps"], a[0].columns["gy_dps"])
+
+
+def test_session_scenarios_refuse_make_scenario_and_fixed_parameters():
+    with pytest.raises(InputError, match="has 3 sessions: make them with make_sessions"):
+        make_scenario("temperature_sessions")
+    with pytest.raises(InputError, match=r"no parameter \['sensitivity'\]"):
+        make_sessions("temperature_sessions_control", sensitivity={"gx_dps": [0, 1]})
+    with pytest.raises(InputError, match=r"no parameter \['lag_s'\]"):
+        make_scenario("temperature_sweep_lag", lag_s=10.0)
+    with pytest.raises(InputError, match="one orientation per sweep"):
+        make_sessions("temperature_sessions", orientations=["+z/+x"])
+    with pytest.raises(InputError, match="perpendicular"):
+        make_sessions("temperature_sessions", duration=10.0,
+                      orientations=["+z/+x", "+x/+x", "+y/+x"])
+    with pytest.raises(InputError, match="sensitivity names"):
+        make_scenario("temperature_sweep", sensitivity={"gw_dps": [0, 1]})
+    with pytest.raises(InputError, match="seed"):
+        make_sessions("temperature_sessions", seed=-1)
+
+
+def test_one_session_scenarios_through_make_sessions():
+    (rec,) = make_sessions("clean", seed=3, duration=10.0)
+    np.testing.assert_array_equal(rec.columns["gyro_x"],
+                                  make_scenario("clean", seed=3, duration=10.0).columns["gyro_x"])
+    assert "session" not in rec.truth
+
+
+def test_session_overrides_reach_every_session():
+    records = make_sessions("temperature_sessions", seed=0, duration=3600.0, lag_s=600.0,
+                            sweeps=[[[0, 10], [1, 12]], [[0, 10], [1, 14]]],
+                            orientations=["+z/+x", "-z/+y"])
+    assert len(records) == 2 and records[1].truth["orientation"]["up"] == "-z"
+    assert records[0].truth["shared"]["temperature_bias"]["gx_dps"]["lag_s"] == 600.0
+    assert records[1].columns["temp_c"][-1] == pytest.approx(14.0, abs=0.3)

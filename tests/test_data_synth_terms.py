@@ -96,12 +96,12 @@ def test_evaluate_computes_lagged_products():
 
 
 def test_truth_terms_are_fosmodel_term_names():
-    from data_synth.scenarios import SCENARIOS, make_scenario
+    from data_synth.scenarios import SCENARIOS, make_sessions
     from fosmodel.core.candidates import Term
 
     names = set()
-    for scenario in SCENARIOS:
-        truth = make_scenario(scenario, duration=5.0, seed=1).truth
+    for truth in (rec.truth for scenario in SCENARIOS
+                  for rec in make_sessions(scenario, duration=5.0, seed=1)):
         for entry in truth["sources"] + ([truth["model"]] if truth["model"] else []):
             names.update(t["term"] for t in entry["terms"] or [])
     assert {"y[n-1]*y[n-2]", "temp_c[n-0]^2", "accel_x[n-3]", "rate_ref[n-0]", "1"} <= names
