@@ -87,3 +87,31 @@ def test_a_compensated_model_does_not_export_a_state_space_that_would_drop_it():
     model = FOSModel(max_lag=2, rate=RATE, compensation=COMP).fit(y, channels)
     with pytest.raises(InputError, match="carries a compensation"):
         to_state_space(model)
+
+
+def test_held_weights_are_least_squares_with_the_level_and_lags_summing_to_one():
+    """refit_weights(hold=True) against the constrained least squares of the term matrix."""
+    from fosmodel.core.candidates import Term, evaluate_terms
+    from fosmodel.core.levels import level_series
+
+    rng = np.random.default_rng(7)
+    n = 20_000
+    y = (lfilter([1.0], [1.0, -0.6], rng.standard_normal(n)) * 0.05
+         + np.cumsum(rng.standard_normal(n)) * 0.0001)
+    model = FOSModel(max_lag=3, levels=[30.0, 100.0], rate=RATE).fit(y)
+    levels = {name: level_series(y, float(name[6:-1]), RATE) for name in model.spec_.level_names}
+    held = model.refit_weights(y, levels, hold=True)
+    assert held.terms_ == model.terms_ and any(t.startswith("level@") for t in held.terms_)
+    assert sum(held.coef_) == pytest.approx(1.0, abs=1e-9)  # every term is a lag or a level
+    # the reference: least squares of the centred terms under the constraint, by KKT
+    mu = model.offsets_["y"]
+    signals = {"y": y - mu, **{k: v - mu for k, v in levels.items()}}
+    x = evaluate_terms([Term.parse(t) for t in held.terms_], signals, model.lag_window_)
+    target = (y - mu)[model.lag_window_:]
+    xc, tc = x - x.mean(axis=0), target - target.mean()
+    k = x.shape[1]
+    kkt = np.block([[xc.T @ xc, np.ones((k, 1))], [np.ones((1, k)), np.zeros((1, 1))]])
+    w = np.linalg.solve(kkt, np.r_[xc.T @ tc, 1.0])[:k]
+    np.testing.assert_allclose(held.coef_, w, rtol=1e-7, atol=1e-10)
+    assert held.intercept_ == pytest.approx(target.mean() - x.mean(axis=0) @ w, abs=1e-10)
+    assert sum(model.coef_) < 0.99  # least squares alone weighs the weak wander too little

@@ -81,13 +81,14 @@ def test_the_other_axes_of_the_same_kind_are_companions(sensor, expected):
     channels = ["temp_c", "gy_dps", "gz_dps", "ax_g", "ay_g", "vbat"]
     roles = channel_roles(channels, sensor)
     assert (roles.drivers, roles.companions) == expected and roles.opted_in == ()
-    assert roles.inputs == roles.drivers
+    assert roles.inputs == roles.drivers and roles.slow == ("temp_c", "vbat")
 
 
 def test_companions_given_or_told_by_the_file_and_taken_in_only_when_asked():
     names = ["temp", "w1", "w2", "f1"]
     told = channel_roles(names, "gyro", sensors={"w1": "gyro", "w2": "gyro", "f1": "accel"})
     assert told.companions == ("w1", "w2") and told.drivers == ("temp", "f1")
+    assert told.motion == ("f1",) and told.slow == ("temp",)  # an accelerometer: g-sensitivity
     given = channel_roles(names, "gyro", companions=["w2"], aux=["w2"])
     assert given.companions == ("w2",) and given.opted_in == ("w2",) and given.told == "as given"
     assert given.inputs == ("temp", "w1", "f1", "w2") and given.role("w2") == "companion"

@@ -54,7 +54,7 @@ from .slow_driver import still
 
 Progress = Callable[[str], None]
 #: Fewest windows of a horizon the prediction segment must hold for it to be reported (its
-#: interval needs :data:`fosmodel.loop.judge.MIN_WINDOWS`; fewer read "undetermined").
+#: interval needs :data:`fosmodel.loop.judge.MIN_INTERVAL_WINDOWS`; fewer read "undetermined").
 REPORT_WINDOWS = 2
 
 
@@ -276,7 +276,7 @@ def notes(record: LoopRecord, diagnose: Diagnostics, family: CandidateFamily, ju
     """
     comp = family.compensation_series()
     target = record.y if comp is None else record.y - comp
-    out = [text for ch in roles.drivers if ch not in _driven(family)
+    out = [text for ch in roles.slow if ch not in _driven(family)
            for text in [still(record, diagnose.forms, ch, target)] if text]
     out += [f"the {h:g} s horizon is not judged: {why}" for h, why in judged.skipped.items()]
     out += [f"the {h:g} s horizon is not reported: {why}" for h, why in reported.skipped.items()]

@@ -44,7 +44,7 @@ class LoopConfig:
     horizons_s : tuple of float
         Outage lengths (s) the loop judges on the evaluation segment and reports on the
         prediction segment, each where the segment holds enough windows
-        (:data:`fosmodel.loop.horizons.MIN_WINDOWS`).
+        (:data:`fosmodel.loop.judge.MIN_WINDOWS`).
     eval_horizon_s : float
         A short outage the judge also compares on: the bias a filter integrates between
         updates, judged however short the record.

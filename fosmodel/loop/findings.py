@@ -80,11 +80,11 @@ class Diagnostics:
             findings.append(self._nonlinearity(fast, n0))
         findings += [trend(r, t, alpha=config.alpha), change_point(r, t, alpha=config.alpha),
                      allan(r, rate, alpha=config.alpha)]
-        if self.roles.drivers:
+        if self.roles.slow:
             comp = family.compensation_series()
             target = y if comp is None else y - comp
             findings += [slow_driver(target, ch, self.forms, config.alpha)
-                         for ch in self.roles.drivers]
+                         for ch in self.roles.slow]
         return findings
 
     def _nonlinearity(self, fast: np.ndarray, n0: int) -> Finding:

@@ -57,7 +57,10 @@ class Fitter:
                          product_lags=family.product_lags, stop=self.config.fos_stop,
                          compensation=dict(family.compensation) or None)
         train = self.train
-        model.fit(self.record.y[train], {k: v[train] for k, v in inputs.items()})
+        past = {k: v[train] for k, v in inputs.items()}
+        model.fit(self.record.y[train], past)
+        if _holds(family):
+            model = model.refit_weights(self.record.y[train], past, hold=True)
         return BoundModel(model, inputs)
 
     def refit(self, bound: BoundModel, family: CandidateFamily, stop: int) -> BoundModel:
@@ -77,7 +80,8 @@ class Fitter:
             model.compensation = weights
             inputs = self.inputs(family)
         past = {k: v[:stop] for k, v in inputs.items()}
-        return BoundModel(model.refit_weights(self.record.y[:stop], past), inputs)
+        return BoundModel(model.refit_weights(self.record.y[:stop], past, hold=_holds(family)),
+                          inputs)
 
     def forget(self, keep: CandidateFamily) -> None:
         """Drop what only other families read: their columns and levels."""
@@ -85,6 +89,18 @@ class Fitter:
         self._targets = {k: v for k, v in self._targets.items() if k in ((), key)}
         self._levels = {k: v for k, v in self._levels.items() if k[1] in ((), key)}
         self.record.forget(set(keep.arrays()))
+
+
+def _holds(family: CandidateFamily) -> bool:
+    """Whether the family's levels are held (:meth:`FOSModel.refit_weights` with ``hold``).
+
+    With a compensation: its output has lost the driver's slow swing, so on the fitting
+    data its level wanders too little against the noise for least squares to weigh it
+    fully, and a free run would drift back to a training mean the bias has left.  Without
+    one the slow swing itself holds the weights near one, and a drift or a step beside the
+    level is fitted against a level that follows them only as least squares lets it.
+    """
+    return bool(family.levels and family.compensation)
 
 
 class Judge:

@@ -12,16 +12,18 @@ window estimate of it is what the moving-block bootstrap of the pairs gives,
 in closed form (Kuensch 1989, sec. 3: the block bootstrap's variance of a mean
 is the Bartlett-window spectral estimate at frequency zero, the block length
 its lag window).  The lag window follows the data (Andrews 1991's rule for an
-AR(1) of ``z``), and the quantile is Student's with a degree of freedom per
-lag window less one, as for batch means (Schmeiser 1982): with the few windows
-of a long outage, a normal quantile, or a resampling, gives intervals too
-narrow (a simulation of ten to a hundred AR(1) windows covers 60-90 % with a
-95 % percentile block bootstrap, 85-96 % so).  No resampling: the same
-windows always give the same interval.
+AR(1) of ``z``), the variance is scaled by ``n / (n - l - 1)`` for the means it
+subtracts, and the quantile is Student's with a degree of freedom per lag
+window less one, as for batch means (Schmeiser 1982): with the few windows of a
+long outage, a normal quantile, or a resampling, gives intervals too narrow.
+Measured on AR(1) windows (400 replicates each), a 95 % interval covers
+93-96 % of 60-200 windows with a lag-one correlation up to 0.5, 89-90 % of 20-40
+windows or of a correlation of 0.8, where a percentile block bootstrap covers
+60-90 %.  No resampling: the same windows always give the same interval.
 
 A ratio is *better* when its interval lies below 1, *worse* when it lies
 above, and *undetermined* when it spans 1 or when fewer than
-:data:`fosmodel.loop.judge.MIN_WINDOWS` windows hold it: too few to tell.
+:data:`fosmodel.loop.judge.MIN_INTERVAL_WINDOWS` windows hold it: too few to tell.
 
 References
 ----------
@@ -42,7 +44,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from .judge import MIN_WINDOWS
+from .judge import MIN_INTERVAL_WINDOWS
 from .scores import Scores
 
 
@@ -108,14 +110,14 @@ def ratio_interval(a: np.ndarray, b: np.ndarray, confidence: float,
     lags = lag_window(z)
     gamma = [float(z[k:] @ z[: n - k]) / n for k in range(lags + 1)]
     variance = gamma[0] + 2 * sum((1 - k / (lags + 1)) * gamma[k] for k in range(1, lags + 1))
-    se = math.sqrt(max(variance, 0.0) / n)
+    se = math.sqrt(max(variance, 0.0) / max(n - lags - 1, 1))
     t = float(stats.t.ppf((1 + confidence) / 2, max(1, n // (lags + 1) - 1)))
     return (ratio_**power, (ratio_ * math.exp(-t * se)) ** power,
             (ratio_ * math.exp(t * se)) ** power)
 
 
 def ratio(name: str, key: str, a: np.ndarray, b: np.ndarray, confidence: float,
-          power: float = 1.0, least: int = MIN_WINDOWS) -> Ratio:
+          power: float = 1.0, least: int = MIN_INTERVAL_WINDOWS) -> Ratio:
     """Return the :class:`Ratio` of ``b`` to ``a`` over their windows, with what it says."""
     windows = len(a)
     if np.array_equal(a, b):

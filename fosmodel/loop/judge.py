@@ -43,8 +43,12 @@ from scipy import stats
 from ..models.bound import BoundModel
 from ..noise.metrics import OneStepModel, free_run_errors
 
-#: Fewest outage windows a segment must hold for a horizon to be judged or reported there.
-MIN_WINDOWS = 10
+#: Fewest outage windows the evaluation segment must hold for a horizon to be judged there:
+#: the encompassing t test then has 7 degrees of freedom, and a day-long record's 20 % still
+#: judges its 30 min outages.
+MIN_WINDOWS = 8
+#: Fewest windows a before/after ratio's interval needs (:mod:`fosmodel.loop.intervals`).
+MIN_INTERVAL_WINDOWS = 10
 MIN_HALF_WINDOWS = 20  # outage windows in each half of the evaluation segment to judge it
 GAIN_TOL = 1e-9  # an earlier origin's gain above -GAIN_TOL counts as no loss (rounding)
 #: Smallest share of the errors' sum of squares an effect must remove to be kept: with

@@ -27,12 +27,21 @@ class Roles:
     """The channels of a record by role, and how the roles were told.
 
     ``companions`` are never inputs but those in ``opted_in``; ``drivers`` may be.
+    ``motion`` are the drivers that are inertial axes of the other kind (a gyro's
+    accelerometers): their coupling is instantaneous (g-sensitivity), so they are offered
+    in their fast part only, not in the slow forms of a temperature.
     """
 
     drivers: tuple[str, ...]
     companions: tuple[str, ...]
     opted_in: tuple[str, ...]
     told: str
+    motion: tuple[str, ...] = ()
+
+    @property
+    def slow(self) -> tuple[str, ...]:
+        """The drivers offered in the slow forms too: all but the inertial axes."""
+        return tuple(c for c in self.drivers if c not in self.motion)
 
     @property
     def inputs(self) -> tuple[str, ...]:
@@ -101,8 +110,9 @@ def channel_roles(channels: Iterable[str], sensor: str | None,
         raise OptionError(f"{{option}}: {stray[0]!r} is not a companion of the modelled axis "
                           f"(companions: {', '.join(found) or 'none'}); a driver is offered "
                           "as an input already", "aux")
-    return Roles(tuple(c for c in names if c not in found), tuple(found),
-                 tuple(c for c in found if c in set(aux)), told)
+    drivers = tuple(c for c in names if c not in found)
+    return Roles(drivers, tuple(found), tuple(c for c in found if c in set(aux)), told,
+                 tuple(c for c in drivers if sensor_of(c) is not None))
 
 
 def _among(given: Sequence[str], names: list[str], option: str) -> None:

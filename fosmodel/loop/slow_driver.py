@@ -8,10 +8,13 @@ the fast noise has averaged out, while a stochastic level is allowed beside
 them.  A local level at the block scale is an ARIMA(0,1,1) error, whose one-step
 predictor is the exponential smoother of gain ``g`` (Harvey 1989, sec. 2.3), so the
 regression with such an error is least squares on the smoother's innovations,
-``y - s_g(y)`` on ``F - s_g(F)`` (Box and Jenkins' conditional sum of squares);
-``g = 0`` is a constant per session instead (the within estimator of panel data).
-For each ``g`` of a grid FOS chooses the forms (the degree of the powers, which
-lag) by BIC, and the ``g`` with the lowest BIC wins.  So a driver that only
+``y - s_g(y)`` on ``F - s_g(F)`` (Box and Jenkins' conditional sum of squares).
+Beside ``g = 0`` a constant and a trend
+of their own per session are tried: a driver that only does what a straight line
+in time does is then no evidence of itself (a wander that happened to trend over
+the fitting data fits any driver that swept meanwhile).  For each ``g`` of a grid the
+forms (a base, the driver or one of its lags, and the degree of its powers) are
+chosen by BIC, and the ``g`` with the lowest BIC wins.  So a driver that only
 looks like a random walk (a spurious regression of two wandering series) is
 judged on its increments, while one that explains most of the slow swing is
 judged on its levels.  Sessions restart the smoother: each has its own constant,
@@ -25,6 +28,9 @@ the driver; the loop's judge, out of sample, decides.
 
 References
 ----------
+C. S. Bretherton, M. Widmann, V. I. Dymnikov, J. M. Wallace and I. Blade, "The
+effective number of spatial degrees of freedom of a time-varying field", *Journal
+of Climate* 12(7), 1999.
 A. C. Harvey, *Forecasting, Structural Time Series Models and the Kalman Filter*,
 Cambridge University Press, 1989, sections 2.3 and 7.2.
 G. E. P. Box, G. M. Jenkins, *Time Series Analysis: Forecasting and Control*,
@@ -54,18 +60,22 @@ MAX_POWER = 3
 LAGS = 6
 #: Gains of the block-scale level: time constants of this many blocks (and none: g = 0).
 LEVEL_BLOCKS = (2.0, 6.0, 20.0, 60.0)
+#: The "gain" that stands for a constant and a trend per session instead of a level.
+TREND = -1.0
 #: A driver "varies" in the fitting data when the spread of its block means there is at
 #: least this share of its spread over the whole record.
 VARIES = 0.1
 
 
 def block_samples(fit: Sequence[slice], rate: float, slow_s: float) -> int:
-    """Return the samples per block.
+    """Return the samples per block: the fitting data in :data:`MIN_BLOCKS` blocks.
 
-    ``slow_s`` seconds, fewer if the fitting data would hold fewer than :data:`MIN_BLOCKS`.
+    The longest blocks that leave enough of them: a driver's slow swing is clearest
+    where the fast noise and the short wander of the bias have averaged out (a
+    temperature's sensitivity shows in the means over minutes, not seconds).
     """
     total = sum(s.stop - s.start for s in fit)
-    return max(1, min(round(slow_s * rate), total // MIN_BLOCKS))
+    return max(1, total // MIN_BLOCKS)
 
 
 def form_names(channel: str, centre: float, fit_s: float, block_s: float,
@@ -95,13 +105,22 @@ def block_means(x: np.ndarray, parts: Sequence[slice], block: int) -> list[np.nd
 
 
 def innovations(parts: list[np.ndarray], gain: float) -> np.ndarray:
-    """Each part minus its one-step exponential smoother of ``gain`` (0: minus its mean).
+    """Each part minus its one-step exponential smoother of ``gain``, or its mean or line.
 
-    The first value of each part, where the smoother starts, is left out.
+    The first value of each part, where the smoother starts, is left out.  With ``gain``
+    0 each part loses its mean; with :data:`TREND` its least-squares line in time.
     """
-    out = [x - x.mean(axis=0) if gain == 0 else (x - _smooth(x, gain))[1:]
-           for x in parts if len(x) >= 2]
+    out = [x - x.mean(axis=0) if gain == 0 else _detrended(x) if gain == TREND
+           else (x - _smooth(x, gain))[1:] for x in parts if len(x) >= 3]
     return np.concatenate(out) if out else np.empty((0, *parts[0].shape[1:]))
+
+
+def _detrended(x: np.ndarray) -> np.ndarray:
+    t = np.arange(len(x), dtype=float)
+    t -= t.mean()
+    centred = x - x.mean(axis=0)
+    slope = (t @ centred) / (t @ t)
+    return centred - np.multiply.outer(t, slope)
 
 
 def _smooth(x: np.ndarray, gain: float) -> np.ndarray:
@@ -161,13 +180,14 @@ def slow_driver(target: np.ndarray, channel: str, forms: DriverForms,
     best = _best_fit(y_blocks, f_blocks)
     if best is None:
         return Finding("driver", 0.0, 1.0, alpha, evidence)
-    gain, columns, coef, sse, sse0, n = best
-    k = len(columns)
-    dof = n - k - 1
-    f = ((sse0 - sse) / k) / (sse / dof) if sse > 0 else math.inf
-    p = min(1.0, float(stats.f.sf(f, k, dof)) * (len(names) // MAX_POWER))
+    gain, columns, coef, residual, sse0 = best
+    k, sse = len(columns), float(residual @ residual)
+    dof = effective_samples(residual) - k - 1
+    f = ((sse0 - sse) / k) / (sse / dof) if sse > 0 and dof > 0 else 0.0
+    p = min(1.0, float(stats.f.sf(f, k, dof)) * (len(names) // MAX_POWER)) if dof > 0 else 1.0
     evidence.update(forms=[[names[j], float(w)] for j, w in zip(columns, coef)],
-                    level_blocks=None if gain == 0 else 1.0 / gain,
+                    level_blocks=None if gain in (0, TREND) else 1.0 / gain,
+                    trend=gain == TREND,
                     share=float(1 - sse / sse0) if sse0 > 0 else 0.0)
     return Finding("driver", float(f), p, alpha, evidence)
 
@@ -187,18 +207,18 @@ def _models(n_forms: int) -> list[list[int]]:
 def _best_fit(y_blocks: list[np.ndarray], f_blocks: list[np.ndarray]) -> tuple | None:
     """Return the fit with the lowest BIC.
 
-    The fit is ``(gain, columns, weights, SSE, SSE with no form, innovations)``, or None
+    The fit is ``(gain, columns, weights, residual, SSE with no form)``, or None
     when no form beats no form at all (a driver that does not vary, or explains nothing):
     a polynomial in one base, its degree chosen by BIC as the gain of the level is.
     """
     best, best_bic = None, math.inf
     models = _models(f_blocks[0].shape[1])
-    for gain in (0.0, *(1.0 / b for b in LEVEL_BLOCKS)):
+    for gain in (0.0, TREND, *(1.0 / b for b in LEVEL_BLOCKS)):
         y, forms = innovations(y_blocks, gain), innovations(f_blocks, gain)
         if len(y) < 10 or np.ptp(y) == 0:
             continue
         y, forms = y - y.mean(), forms - forms.mean(axis=0)
-        n, extra = len(y), int(gain > 0)
+        n, extra = len(y), int(gain != 0)  # a gain, or a trend per session
         sse0 = float(y @ y)
         null_bic = n * math.log(max(sse0 / n, 1e-300)) + extra * math.log(n)
         if null_bic < best_bic:
@@ -208,11 +228,27 @@ def _best_fit(y_blocks: list[np.ndarray], f_blocks: list[np.ndarray]) -> tuple |
             if np.ptp(x, axis=0).min() <= 1e-12 * (np.abs(x).max() + 1e-300):
                 continue  # a form that does not vary here
             coef, *_ = np.linalg.lstsq(x, y, rcond=None)
-            sse = float(np.sum((y - x @ coef) ** 2))
+            residual = y - x @ coef
+            sse = float(residual @ residual)
             bic = n * math.log(max(sse / n, 1e-300)) + (len(columns) + extra) * math.log(n)
             if bic < best_bic:
-                best, best_bic = (gain, columns, coef, sse, sse0, n), bic
+                best, best_bic = (gain, columns, coef, residual, sse0), bic
     return best
+
+
+def effective_samples(residual: np.ndarray) -> float:
+    """Return the innovations' count as independent samples: ``n (1 - r) / (1 + r)``.
+
+    ``r`` is their lag-one autocorrelation (none when it is negative).  A wander the
+    forms and the level leave behind keeps its autocorrelation, and an F test counting
+    every block as independent would take its fit to any swept driver for evidence (a
+    spurious regression); this is the usual correction of the degrees of freedom for an
+    AR(1) residual (Bretherton et al. 1999, eq. 31).
+    """
+    n = len(residual)
+    zz = float(residual @ residual)
+    r = max(0.0, float(residual[1:] @ residual[:-1]) / zz) if zz > 0 and n > 1 else 0.0
+    return n * (1 - r) / (1 + r)
 
 
 def refit_forms(target: np.ndarray, columns: Mapping[str, np.ndarray], parts: Sequence[slice],

@@ -55,6 +55,7 @@ from ..core.levels import (
     check_level_rate,
     check_level_series,
     checked_level_tau,
+    is_level,
     level_after,
     level_series,
     with_levels,
@@ -605,7 +606,7 @@ class FOSModel(BaseEstimator):
 
     def refit_weights(
         self, y: ArrayLike, exog: Exog | None = None,
-        segments: Sequence[slice] | None = None,
+        segments: Sequence[slice] | None = None, *, hold: bool = False,
     ) -> FOSModel:
         """Return a copy with the selected terms' weights fitted anew on ``y`` (least squares).
 
@@ -613,6 +614,14 @@ class FOSModel(BaseEstimator):
         are numerically dependent on ``y`` (a step after its end, say) are
         dropped.  The residual loop uses it to ask how a model chosen on one
         stretch does when its weights come from an earlier one.
+
+        With ``hold`` and a level among the terms, the weights of the output's lags and
+        levels are fitted subject to summing to one (least squares under that equality,
+        :func:`_held_weights`): the model is then a local level with deviations about it,
+        and a free run holds the level it starts from instead of returning to the
+        training mean.  Least squares alone on a stretch where the wander is weak against
+        the noise puts that sum well below one, and an outage then drifts back to a mean
+        the bias has left.
 
         Returns
         -------
@@ -622,7 +631,7 @@ class FOSModel(BaseEstimator):
         y_arr = as_signal(y, "y")
         if self.compensation:
             refit = self._plain().refit_weights(y_arr - self._compensation(exog, len(y_arr)),
-                                                exog, segments)
+                                                exog, segments, hold=hold)
             refit.compensation = self.compensation
             return refit
         n0 = self.lag_window_
@@ -645,7 +654,12 @@ class FOSModel(BaseEstimator):
             res = fos_search(corr, StopRule("max_terms", max_terms=len(self._terms)),
                               intercept=True, dependence_tol=self.dependence_tol)
         new = copy.copy(self)
-        new._set_terms([self._terms[i] for i in res.support], res.coef, res.intercept)
+        terms = [self._terms[i] for i in res.support]
+        dynamic = [any(ch == OUTPUT or is_level(ch) for ch, _ in t.factors) and t.degree == 1
+                   for t in terms]
+        if hold and any(is_level(t.factors[0][0]) for t, d in zip(terms, dynamic) if d):
+            res.coef, res.intercept = _held_weights(corr, res.support, np.array(dynamic))
+        new._set_terms(terms, res.coef, res.intercept)
         new.mse_path_, new.q_, new.mse_null_ = res.mse_path, res.q, res.mse_null
         new.coef_se_, new.intercept_se_ = res.coef_se, res.intercept_se
         new.n_samples_, new.stop_reason_ = res.n_samples, "refit"
@@ -951,6 +965,25 @@ class FOSModel(BaseEstimator):
         self._check_fitted()
         raw = expand_centred(self._terms, self.coef_, self.intercept_, self.offsets_)
         return {term.name: weight for term, weight in raw.items()}
+
+
+def _held_weights(corr: Correlations, support: np.ndarray,
+                  dynamic: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares weights of the ``support`` terms whose ``dynamic`` ones sum to one.
+
+    On the covariances (the intercept is ``mean(y) - means . w``): ``w = C^-1 (c + l a)``
+    with ``a`` the indicator of the dynamic terms and ``l`` the Lagrange multiplier that
+    makes ``a . w = 1``.
+    """
+    means = corr.means[support]
+    cov = np.column_stack([corr.column(int(j))[support] for j in support]) - np.outer(means,
+                                                                                     means)
+    target = corr.target[support] - means * corr.y_mean
+    a = dynamic.astype(float)
+    solve = np.linalg.pinv(cov)
+    base, step = solve @ target, solve @ a
+    w = base + (1.0 - a @ base) / (a @ step) * step
+    return w, float(corr.y_mean - means @ w)
 
 
 def _older_state(version: int, fitted: Mapping[str, object], n_terms: int) -> dict[str, object]:

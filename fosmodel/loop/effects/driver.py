@@ -34,7 +34,7 @@ from ...core.derived import fast_name
 from ...core.levels import levels_for
 from ...models.bound import BoundModel
 from ..record import LoopRecord
-from ..slow_driver import compensation_of, forms_text
+from ..slow_driver import TREND, compensation_of, forms_text
 from .base import Effect, Offer, register
 from .family import CandidateFamily
 from .level import first_level_tau
@@ -48,9 +48,9 @@ class Driver(Effect):
     """A driver's slow part or its fast part.
 
     The slow part has its ``forms`` (derived column names and weights), the ``block`` and
-    the block-scale level (``level_blocks``) they were fitted at, and the ``level_taus`` it
-    comes with; the fast part its lags ``0..max_lag`` and the time constant ``tau_s`` of
-    the level it leaves out.
+    the block-scale level (``level_blocks``) or the ``trend`` per session they were fitted
+    beside, and the ``level_taus`` it comes with; the fast part its lags ``0..max_lag`` and
+    the time constant ``tau_s`` of the level it leaves out.
     """
 
     kind = "driver"
@@ -63,6 +63,7 @@ class Driver(Effect):
     tau_s: float | None = None
     block: int | None = None
     level_blocks: float | None = None
+    trend: bool = False
 
     @classmethod
     def offered(cls, offer: Offer) -> list[Effect]:
@@ -78,8 +79,8 @@ class Driver(Effect):
                 block = round(f.evidence["block_s"] * offer.config.rate)
                 taus = _level_taus(offer, forms) if f.evidence["level_blocks"] else None
                 out.append(cls(f.evidence["channel"], "slow", tuple(forms.items()), taus,
-                               block=block,
-                               level_blocks=f.evidence["level_blocks"], evidence=f.to_dict()))
+                               block=block, level_blocks=f.evidence["level_blocks"],
+                               trend=bool(f.evidence.get("trend")), evidence=f.to_dict()))
         out += [cls(f.evidence["channel"], "fast", max_lag=max(offer.config.aux_max_lag,
                                                                f.evidence["lag"]),
                     tau_s=offer.config.slow_s, evidence=f.to_dict())
@@ -100,7 +101,8 @@ class Driver(Effect):
         if self.part == "fast":
             return family.with_input(fast_name(self.channel, _need(self.tau_s, "tau_s")),
                                      _need(self.max_lag, "max_lag"), record)
-        gain = 0.0 if self.level_blocks is None else 1.0 / self.level_blocks
+        gain = (TREND if self.trend else 0.0 if self.level_blocks is None
+                else 1.0 / self.level_blocks)
         family = family.with_compensation(dict(self.forms), record, (self.block or 1, gain))
         return family.with_levels(self.level_taus) if self.level_taus else family
 
