@@ -531,7 +531,7 @@ def test_multi_valued_options_take_comma_lists():
     # --aux no longer swallows the record named after it
     args = parser.parse_args(["close-loop", "--aux", "temp_c,hum", "r.csv", "--column", "g",
                               "--out", "o"])
-    assert args.aux == ["temp_c", "hum"] and args.file == "r.csv"
+    assert args.aux == ["temp_c", "hum"] and args.files == ["r.csv"]
     args = parser.parse_args(["study", "r.csv", "--columns", "gx,gy", "--orders", "1-3,8",
                               "--degrees", "1", "--methods", "fos,burg", "--out", "o"])
     assert (args.columns, args.orders, args.methods) == (["gx", "gy"], [1, 2, 3, 8],

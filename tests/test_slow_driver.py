@@ -95,7 +95,7 @@ def test_an_accelerometer_drives_a_gyro_in_its_fast_part_only():
     config = LoopConfig(rate=1.0)
     family = CandidateFamily(config.max_lag)
     model = Fitter(record, slice(0, 2000), config).fit(family)
-    findings = Diagnostics(record, 2000, roles, config)(model, family)
+    findings = Diagnostics(record, (slice(0, 2000),), roles, config)(model, family)
     assert [f.evidence["channel"] for f in findings if f.test == "driver"] == ["temp_c"]
     assert [f.evidence["channel"] for f in findings if f.test == "aux"] == [
         "temp_c", "ax_g", "gy_dps"]  # the companion's correlation is cross-axis noise

@@ -36,7 +36,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     fit = sub.add_parser("fit", help="fit a FOS model to one column of a record")
-    fit.add_argument("file", help=RECORD_HELP)
+    fit.add_argument("files", nargs="+", metavar="FILE",
+                     help=RECORD_HELP.replace("record:", "record, or several sessions of one "
+                                              "sensor (shared weights, a constant each):"))
     fit.add_argument("--column", required=True, help="column to model")
     add_loader_options(fit)
     fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L")
@@ -109,7 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     loop = sub.add_parser("close-loop", help="find what the model lacks in its residual, "
                           "add it, report the error before and after")
-    loop.add_argument("file", help=RECORD_HELP)
+    loop.add_argument("files", nargs="+", metavar="FILE",
+                      help=RECORD_HELP.replace("record:", "record, or several sessions of one "
+                                               "sensor, each judged with the others fitted:"))
     loop.add_argument("--column", required=True, help="column to model")
     add_loader_options(loop, contiguous="the residual loop")
     loop.add_argument("--aux", type=name_list, metavar="COL[,COL...]",

@@ -201,7 +201,16 @@ def close_loop(
     Returns
     -------
     LoopResult
+        Or, given a sequence of :class:`fosmodel.loop.sessions.Session` as ``y`` (with
+        ``channels`` None), the :class:`~fosmodel.loop.sessions.SessionsResult` of
+        :func:`fosmodel.loop.sessions.close_sessions`.
     """
+    from .sessions import Session, close_sessions
+
+    if isinstance(y, (list, tuple)) and y and all(isinstance(s, Session) for s in y):
+        if channels is not None:
+            raise InputError("sessions carry their own channels: give channels=None")
+        return close_sessions(y, config, progress)  # type: ignore[return-value]
     say = progress or (lambda _: None)
     y = as_signal(y, "the record")
     channels = as_channels(channels, list(channels or {}), len(y))
@@ -218,7 +227,7 @@ def close_loop(
     family = CandidateFamily(config.max_lag)
     current = base = fitter.fit(family)
     say(f"starting model: {len(base.model.terms_)} terms ({time.perf_counter() - clock:.1f} s)")
-    diagnose = Diagnostics(record, segments.train.stop, roles, config)
+    diagnose = Diagnostics(record, (slice(0, segments.train.stop),), roles, config)
     findings = findings_before = diagnose(current, family)
     steps: list[Step] = []
     rejected: list[Rejected] = []

@@ -54,30 +54,46 @@ def residual(model: BoundModel, y: np.ndarray, stop: int) -> np.ndarray:
 
 
 class Diagnostics:
-    """Every diagnostic on the residual of the fitting segment ``[0, stop)``."""
+    """Every diagnostic on the residual of the fitting data ``fit`` (sample ranges).
 
-    def __init__(self, record: LoopRecord, stop: int, roles: Roles, config: LoopConfig) -> None:
-        self.record, self.stop, self.roles, self.config = record, stop, roles, config
+    One range for a record (its fitting segment), one per session for several: the
+    residual of each comes from its own model, and the tests read them end to end.
+    """
+
+    def __init__(self, record: LoopRecord, fit: tuple[slice, ...], roles: Roles,
+                 config: LoopConfig) -> None:
+        self.record, self.fit, self.roles, self.config = record, fit, roles, config
         self.channels = {k: record.channels[k] for k in (*roles.drivers, *roles.companions)}
         self._aux: dict[int, AuxChannels] = {}
-        self.forms = DriverForms(record, (slice(0, stop),), config.slow_s)
+        self.forms = DriverForms(record, fit, config.slow_s)
 
     def __call__(self, model: BoundModel, family: CandidateFamily) -> list[Finding]:
-        """Return the findings on ``model``, whose candidate family is ``family``."""
-        config, rate, stop, n0 = self.config, self.config.rate, self.stop, model.lag_window_
-        y = self.record.y
-        r = residual(model, y, stop)
-        t = np.arange(n0, stop) / rate
+        """Return the findings on ``model`` (of one record), whose family is ``family``."""
+        y, n0 = self.record.y, model.lag_window_
+        return self.of([residual(model, y, p.stop)[p.start:] for p in self.fit], n0, family)
+
+    def of(self, residuals: list[np.ndarray], n0: int,
+           family: CandidateFamily) -> list[Finding]:
+        """Return the findings on the residuals of each fitting range from its sample ``n0``.
+
+        ``family`` is the candidate family of the models that left them.
+        """
+        config, rate, y = self.config, self.config.rate, self.record.y
+        parts = [slice(p.start + n0, p.stop) for p in self.fit]
+        r = np.concatenate(residuals)
+        start = parts[0].start if len(parts) == 1 else 0  # several: time runs on end to end
+        t = np.arange(start, start + len(r)) / rate
         fast = fast_part(r, rate, config.slow_s)
         fmin = max(5 * rate / len(r), 1.0 / config.slow_s)
         findings = [whiteness(r, alpha=config.alpha),
                     periodic(fast, t, rate, alpha=config.alpha, fmin_hz=fmin)]
         if self.channels:
             if n0 not in self._aux:
-                self._aux[n0] = AuxChannels({k: v[n0:stop] for k, v in self.channels.items()})
+                self._aux[n0] = AuxChannels({k: np.concatenate([v[p] for p in parts])
+                                             for k, v in self.channels.items()})
             findings += aux_correlation(r, self._aux[n0], config.aux_max_lag, alpha=config.alpha)
         if n0 >= config.nonlinear_lags:
-            findings.append(self._nonlinearity(fast, n0))
+            findings.append(self._nonlinearity(fast, parts))
         findings += [trend(r, t, alpha=config.alpha), change_point(r, t, alpha=config.alpha),
                      allan(r, rate, alpha=config.alpha)]
         if self.roles.slow:
@@ -87,13 +103,17 @@ class Diagnostics:
                          for ch in self.roles.slow]
         return findings
 
-    def _nonlinearity(self, fast: np.ndarray, n0: int) -> Finding:
+    def _nonlinearity(self, fast: np.ndarray, parts: list[slice]) -> Finding:
         """Test the residual for products of the fast parts of the lagged outputs."""
-        config, stop = self.config, self.stop
+        config, y = self.config, self.record.y
         # filtered one lag at a time into the matrix: the filter of the whole matrix, or a
         # stack of the filtered columns, would hold two copies of it
-        lagged = np.empty((stop - n0, config.nonlinear_lags))
-        for k in range(1, config.nonlinear_lags + 1):
-            fast_part(self.record.y[n0 - k : stop - k], config.rate, config.slow_s,
-                      out=lagged[:, k - 1])
+        lagged = np.empty((len(fast), config.nonlinear_lags))
+        row = 0
+        for p in parts:
+            n = p.stop - p.start
+            for k in range(1, config.nonlinear_lags + 1):
+                fast_part(y[p.start - k : p.stop - k], config.rate, config.slow_s,
+                          out=lagged[row : row + n, k - 1])
+            row += n
         return nonlinearity(fast, lagged, alpha=config.alpha)

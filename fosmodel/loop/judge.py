@@ -8,7 +8,8 @@ errors over consecutive windows of it: their mean over each window, the bias a
 navigation filter integrates (per sample they are mostly white noise).
 
 *Forecast encompassing* (:func:`compare`): does the change ``b`` makes to
-``a``'s forecasts explain ``a``'s errors?  ``beta = sum(e_a d) / sum(d^2)``
+``a``'s forecasts explain ``a``'s errors?  And does ``b`` make them worse (the
+Diebold-Mariano test of the loss differences)?  ``beta = sum(e_a d) / sum(d^2)``
 with ``d`` the change, its t statistic from the spread over groups (ten
 batches of one-step errors; the outage windows).  With no effect ``beta`` is
 centred on 0.  Each error kind at each horizon is one typed
@@ -27,6 +28,8 @@ References
 ----------
 D. I. Harvey, S. J. Leybourne and P. Newbold, "Tests for forecast
 encompassing", *Journal of Business & Economic Statistics* 16(2), 1998.
+F. X. Diebold and R. S. Mariano, "Comparing predictive accuracy", *Journal of
+Business & Economic Statistics* 13(3), 1995.
 R. J. Hyndman and G. Athanasopoulos, *Forecasting: Principles and Practice*,
 3rd ed., 2021, section 5.10 (time series cross-validation).
 """
@@ -175,8 +178,25 @@ def _comparison(kind: str, horizon_s: float | None,
     half = len(pairs) // 2
     judged = windows >= 2 * MIN_HALF_WINDOWS
     halves = (_gain(pairs[:half]), _gain(pairs[half:])) if judged else None
-    p_worse = float(stats.t.cdf(t, len(pairs) - 1)) if t == t and len(pairs) > 1 else 1.0
-    return Comparison(kind, horizon_s, len(pairs), _gain(pairs), halves, beta, t, p, p_worse)
+    return Comparison(kind, horizon_s, len(pairs), _gain(pairs), halves, beta, t, p,
+                      _p_worse(pairs))
+
+
+def _p_worse(groups: list[tuple[np.ndarray, np.ndarray]]) -> float:
+    """Return the one-sided p-value of the change making the errors' sum of squares larger.
+
+    The Diebold-Mariano test of the groups' loss differences ``|e - d|^2 - |e|^2``, against
+    Student's t with one degree of freedom fewer than the groups.  (The encompassing
+    ``beta`` cannot say it: a change that overshoots, ``d = 3 e``, has ``beta`` 1/3 and
+    makes every error twice as large.)
+    """
+    loss = np.array([float((e - d) @ (e - d) - e @ e) for e, d in groups])
+    if len(loss) < 2:
+        return 1.0
+    spread = float(loss.std(ddof=1))
+    if spread == 0:
+        return 0.0 if loss.mean() > 0 else 1.0
+    return float(stats.t.sf(loss.mean() / (spread / np.sqrt(len(loss))), len(loss) - 1))
 
 
 def _gain(groups: list[tuple[np.ndarray, np.ndarray]]) -> float:
@@ -213,7 +233,8 @@ class Judgement:
     each earlier origin (None where the trial's new terms cannot be estimated there; the
     whole None when they were not looked at: the trial failed at the end); ``kept_on`` is
     the key of the comparison it is kept on (None: rejected), ``reason`` why not when the
-    loop held an accepted trial back.
+    loop held an accepted trial back.  Over several sessions ``last`` pools every
+    held-out session's comparisons and ``sessions`` holds each one's.
     """
 
     last: tuple[Comparison, ...]
@@ -221,6 +242,7 @@ class Judgement:
     earlier: tuple[tuple[Comparison, ...] | None, ...] | None
     kept_on: str | None
     reason: str | None = None
+    sessions: tuple[tuple[Comparison, ...], ...] | None = None
 
     @property
     def accepted(self) -> bool:
@@ -253,7 +275,9 @@ class Judgement:
                 "origins_s": list(self.origins_s),
                 "gains_from_origins": None if self.earlier is None else
                 {c.key: self.gains(c.key) for c in self.last},
-                "kept_on": self.kept_on, "accepted": self.accepted, "reason": self.reason}
+                "kept_on": self.kept_on, "accepted": self.accepted, "reason": self.reason,
+                **({} if self.sessions is None else {"sessions": [
+                    {c.key: c.to_dict() for c in each} for each in self.sessions]})}
 
 
 def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]],

@@ -14,14 +14,27 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 from ..models.bound import BoundModel
 from .effects import CandidateFamily, Effect
-from .fitting import Fitter, Judge
 from .judge import Judgement
 from .record import LoopRecord
 
 Progress = Callable[[str], None]
+#: How a trial is judged: its model, its family and its effect give its judgement.
+Judges = Callable[[BoundModel, CandidateFamily, Effect], Judgement]
+
+
+class Fits(Protocol):
+    """What fits a candidate family.
+
+    One record's :class:`~fosmodel.loop.fitting.Fitter`, or the sessions'
+    :class:`~fosmodel.loop.sessions.SessionFitter`.
+    """
+
+    def fit(self, family: CandidateFamily) -> BoundModel:
+        """Return the family's model fitted on the fitting data."""
 #: Kass and Raftery: a BIC difference of 6 or more is strong evidence.
 STRONG_BIC = 6.0
 
@@ -50,7 +63,7 @@ class Rejected:
                 "evidence": self.effect.evidence, "evaluation": self.judgement.to_dict()}
 
 
-def run_round(fitter: Fitter, judge: Judge, family: CandidateFamily, candidates: list[Effect],
+def run_round(fitter: Fits, judge: Judges, family: CandidateFamily, candidates: list[Effect],
               record: LoopRecord, say: Progress, number: int,
               ) -> tuple[Trial | None, list[Rejected], list[Effect]]:
     """Fit and judge each candidate on top of the current model; choose the one that goes in.

@@ -666,6 +666,19 @@ class FOSModel(BaseEstimator):
         new.n_dependent_ = res.n_dependent
         return new
 
+    def shifted(self, offset: float) -> FOSModel:
+        """Return a copy whose one-step predictions are ``offset`` higher (its constant moved).
+
+        Another session of the same sensor differs by its own constant (its turn-on
+        bias): ``offset`` is the mean one-step residual of this model over a stretch of
+        it (:func:`fosmodel.models.sessions.session_constant`).  A free run's level moves
+        by ``offset`` over one minus the sum of the output's own weights.
+        """
+        self._check_fitted()
+        new = copy.copy(self)
+        new._set_terms(self._terms, self.coef_, self.intercept_ + float(offset))
+        return new
+
     def ar_coefficients(self) -> np.ndarray:
         """Weights of the pure output lags ``y[n-l]``, l = 1..L (zeros where not selected)."""
         self._check_fitted()
