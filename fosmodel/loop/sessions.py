@@ -359,6 +359,23 @@ def close_sessions(sessions: Sequence[Session], config: LoopConfig,
                           _notes(record, diagnose, fitter, family, roles, judged, names))
 
 
+def score_sessions(sessions: Sequence[Session], config: LoopConfig,
+                   effects: Sequence[Effect]) -> dict[str, Any]:
+    """Return the pooled predicted numbers of the starting model with ``effects`` added.
+
+    Fitted as :func:`close_sessions` fits (shared weights, a constant each, the same parts):
+    with the effects a user knows to be there, or a rival set of them, the yardstick of
+    what the loop kept.
+    """
+    record, _ = _record(sessions, config)
+    decide, _, _, reported = _parts(record, config, round(config.head_s * config.rate))
+    family = CandidateFamily(config.max_lag)
+    for effect in effects:
+        family = family.add(effect, record)
+    fitter = SessionFitter(record, decide, config)
+    return _pool_scores(_scores(fitter, fitter.fit(family), reported, config)).to_dict()
+
+
 def _record(sessions: Sequence[Session], config: LoopConfig) -> tuple[LoopRecord, tuple]:
     """Return the sessions end to end, their channels checked alike."""
     if len(sessions) < 2:
