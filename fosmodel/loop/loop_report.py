@@ -12,7 +12,7 @@ from ..models.summary import markdown_table
 from .closeloop import REPORT_WINDOWS, LoopResult
 from .diagnose import Finding
 from .intervals import ratios
-from .judge import MIN_GAIN, MIN_HALF_WINDOWS, MIN_WINDOWS, Judgement
+from .judge import MIN_GAIN, MIN_HALF_WINDOWS, MIN_OUTAGE_GAIN, MIN_WINDOWS, Judgement
 from .loop_figure import finding_name, residual_figure
 
 __all__ = ["CONSOLE_WIDTH", "console_summary", "describe_finding", "effects_table",
@@ -139,7 +139,8 @@ def _setting(result: LoopResult) -> str:
         f"evaluation segment, it lowers the one-step error or the outage bias (mean free-run "
         f"error over the windows of an outage length: {judged}, each where the segment holds "
         f"at least {MIN_WINDOWS} windows) beyond noise (forecast-encompassing t test at "
-        f"{cfg.accept_alpha:g}) by at least {MIN_GAIN:.1%}, and makes none of them worse "
+        f"{cfg.accept_alpha:g}) by at least {MIN_GAIN:.1%} ({MIN_OUTAGE_GAIN:.0%} for an outage "
+        "bias), and makes none of them worse "
         f"beyond noise; a function of time or a fast effect must also gain over each half of "
         f"the segment (when each holds at least {MIN_HALF_WINDOWS} windows) and, with its "
         f"weights refitted on the past before earlier origins ({origins} s), lose nothing "
