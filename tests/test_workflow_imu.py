@@ -47,6 +47,16 @@ def test_every_axis_goes_through_every_step(result, record):
             / study["baseline outage error (m, 30 s)"]).all()
 
 
+def test_each_axis_has_the_other_axes_of_its_kind_as_companions(result):
+    for a in result.axes:
+        kind = [x.axis.column for x in result.axes
+                if x.axis.sensor == a.axis.sensor and x is not a]
+        assert a.loop.roles.companions == tuple(kind) and a.loop.roles.told == "as given"
+        assert not any(s.effect.kind == "companion" for s in a.loop.steps)
+        assert [c["channel"] for c in a.loop.cross_axis] == kind
+    assert "cross-axis noise (largest)" in result.loop_table()
+
+
 def test_the_rows_are_the_steps_run_alone(result, record):
     """A row of the tables is what the study and the loop of that axis give by themselves."""
     from fosmodel.loop.closeloop import close_loop
