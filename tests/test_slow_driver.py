@@ -18,10 +18,10 @@ def _finding(y, temp):
 
 def test_the_forms_offered_are_powers_of_the_driver_and_its_lags_and_its_rate():
     names = form_names("temp_c", 12.5, 10_800.0, 54.0, 1.0)
-    assert names[:3] == ["pow(temp_c,1,12.5)", "pow(temp_c,2,12.5)", "pow(temp_c,3,12.5)"]
-    lags = sorted({float(parse(parse(n)[1])[2]) for n in names[3:-1]})
+    assert names[:2] == ["pow(temp_c,1,12.5)", "pow(temp_c,2,12.5)"]
+    lags = sorted({float(parse(parse(n)[1])[2]) for n in names[2:-1]})
     assert lags == [160.0, 240.0, 350.0, 510.0, 740.0, 1100.0]  # 3 blocks .. a tenth of the data
-    assert names[-1] == "rate(temp_c,160s)" and len(names) == 3 + 3 * 6 + 1
+    assert names[-1] == "rate(temp_c,160s)" and len(names) == 2 + 2 * 6 + 1
     assert block_samples([slice(0, 10_800)], 1.0, 20.0) == 54
 
 

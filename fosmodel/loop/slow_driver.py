@@ -54,8 +54,10 @@ from .record import LoopRecord
 
 #: Fewest blocks the fitting data are cut into: the block shrinks below ``slow_s`` to keep them.
 MIN_BLOCKS = 200
-#: Highest power of a driver offered.
-MAX_POWER = 3
+#: Highest power of a driver offered: a quadratic is what a MEMS bias's temperature curve takes
+#: (and what a cubic fitted on one session's range adds runs off beyond it: a session held out
+#: that swept 4 C further lost 40 % at 30 min outages with one).
+MAX_POWER = 2
 #: First-order lags offered: this many time constants.
 LAGS = 6
 #: Gains of the block-scale level: time constants of this many blocks (and none: g = 0).

@@ -12,10 +12,10 @@ parts, offered by two tests:
   compensated output: the level follows what the driver does not explain.  A
   level fitted jointly with the driver in one least-squares step would absorb
   the driver's slow swing (one-step errors hardly tell them apart), and in an
-  outage it would hold still where the driver moves on.  The slow residual says
-  whether a level goes with the driver at all: when a constant per session
-  explains what the driver leaves better than a wandering level does (by BIC,
-  :mod:`fosmodel.loop.slow_driver`), the driver comes alone;
+  outage it would hold still where the driver moves on.  Where a constant per
+  session explains what the driver leaves better than a wandering level does
+  (by BIC, :mod:`fosmodel.loop.slow_driver`), the driver is offered alone too,
+  and the judge chooses;
 * its *fast part* (the ``aux`` test on the one-step residual): lags ``0..K`` of
   the channel minus its own local level over ``slow_s`` (``<ch>_fast<T>s``), a
   coupling through the driver's changes, as g-sensitivity enters a gyro.
@@ -77,10 +77,15 @@ class Driver(Effect):
             if f.evidence["channel"] in drivers:
                 forms = compensation_of(f)
                 block = round(f.evidence["block_s"] * offer.config.rate)
-                taus = _level_taus(offer, forms) if f.evidence["level_blocks"] else None
-                out.append(cls(f.evidence["channel"], "slow", tuple(forms.items()), taus,
-                               block=block, level_blocks=f.evidence["level_blocks"],
-                               trend=bool(f.evidence.get("trend")), evidence=f.to_dict()))
+                taus = _level_taus(offer, forms)
+                variants: list[tuple[float, ...] | None] = [taus] if taus else []
+                if taus is None or not f.evidence["level_blocks"]:
+                    variants.append(None)  # alone: no level offered, or none wanted beside it
+                for with_level in variants:
+                    out.append(cls(f.evidence["channel"], "slow", tuple(forms.items()),
+                                   with_level, block=block,
+                                   level_blocks=f.evidence["level_blocks"],
+                                   trend=bool(f.evidence.get("trend")), evidence=f.to_dict()))
         out += [cls(f.evidence["channel"], "fast", max_lag=max(offer.config.aux_max_lag,
                                                                f.evidence["lag"]),
                     tau_s=offer.config.slow_s, evidence=f.to_dict())
@@ -112,8 +117,8 @@ class Driver(Effect):
         return self.part == "fast"
 
     def identity(self) -> tuple:
-        """Return the channel and the part."""
-        return (self.channel, self.part)
+        """Return the channel, the part, and whether the level comes with it."""
+        return (self.channel, self.part, bool(self.level_taus))
 
     def describe(self) -> str:
         """``driver temp_c, slow part (lag 600 s, powers 1, 2) with the level``, ..."""
