@@ -125,7 +125,8 @@ def _study(y: np.ndarray) -> object:
 
 
 def _allan(y: np.ndarray) -> object:
-    from fosmodel.noise.allan import allan_deviation, fit_noise
+    from fosmodel.noise.allan import allan_deviation
+    from fosmodel.noise.allan_fit import fit_noise
 
     return fit_noise(allan_deviation(y, RATE, units="deg/s", sensor="gyro"))
 

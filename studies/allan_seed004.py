@@ -18,8 +18,10 @@ import pandas as pd
 from doc_pages import replace_section, show_figure
 
 from data_synth import make_scenario
-from fosmodel.models.summary import markdown_table
-from fosmodel.noise.allan import TERMS, allan_deviation, fit_noise, write_allan
+from fosmodel.noise.allan import allan_deviation
+from fosmodel.noise.allan_fit import TERMS, fit_noise
+from fosmodel.noise.allan_report import write_allan
+from fosmodel.typeset.markdown import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "allan_seed004"
 HOURS = 12.0

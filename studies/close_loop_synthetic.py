@@ -47,7 +47,7 @@ from fosmodel.loop.loop_report import write_loop_report
 from fosmodel.loop.record import LoopRecord
 from fosmodel.loop.sessions import Session, close_sessions, score_sessions
 from fosmodel.loop.sessions_report import write_sessions_report
-from fosmodel.models.summary import markdown_table
+from fosmodel.typeset.markdown import markdown_table
 from fosmodel.workflows.imu import in_workers
 
 OUT = Path(__file__).resolve().parent / "results" / "close_loop"

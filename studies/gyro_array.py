@@ -42,8 +42,8 @@ from fosmodel.filter.arrays import (
     steady_state_gain,
 )
 from fosmodel.io.output import write_text
-from fosmodel.models.summary import markdown_table
 from fosmodel.study.report import save_figure, write_tables
+from fosmodel.typeset.markdown import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "gyro_array"
 NAMES = tuple(f"gyro_{i}" for i in range(1, 9))

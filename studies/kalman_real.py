@@ -61,9 +61,10 @@ from fosmodel.filter.allan_statespace import (
 from fosmodel.filter.statespace import StateSpace, to_state_space
 from fosmodel.io.loader import load_record
 from fosmodel.io.output import save_figure, write_tables
-from fosmodel.models.summary import markdown_table
-from fosmodel.noise.allan import NoiseFit, allan_deviation, fit_noise
+from fosmodel.noise.allan import allan_deviation
+from fosmodel.noise.allan_fit import NoiseFit, fit_noise
 from fosmodel.noise.metrics import STANDARD_GRAVITY
+from fosmodel.typeset.markdown import markdown_table
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

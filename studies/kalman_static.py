@@ -39,8 +39,8 @@ from fosmodel import FOSModel
 from fosmodel.filter.kalman import KalmanFilter, run_filter
 from fosmodel.filter.statespace import StateSpace, position_velocity_error_model, to_state_space
 from fosmodel.models.baselines import ARModel, GaussMarkovModel
-from fosmodel.models.summary import markdown_table
 from fosmodel.study.report import save_figure, write_tables
+from fosmodel.typeset.markdown import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "kalman_static"
 RATE = 20.0

@@ -14,9 +14,9 @@ from pathlib import Path
 from doc_pages import README, replace_section, show_figure
 
 from fosmodel.demo import run_demo
-from fosmodel.models.summary import markdown_table
 from fosmodel.study.harness import StudyResult
 from fosmodel.study.report import paper_table
+from fosmodel.typeset.markdown import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "paper_demo"
 

@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 from doc_pages import README, replace_section, show_figure
 
+from fosmodel.core.parallel import in_workers
 from fosmodel.io.loader import Record, load_record
 from fosmodel.io.samples import load_mpu6050_static
 from fosmodel.loop.closeloop import LoopConfig, LoopResult, close_loop, score_family
@@ -44,12 +45,11 @@ from fosmodel.loop.effects import CandidateFamily, make
 from fosmodel.loop.loop_report import evaluation_text, write_loop_report
 from fosmodel.loop.record import LoopRecord
 from fosmodel.loop.slow_driver import DriverForms, slow_driver
-from fosmodel.models.summary import markdown_table
 from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
 from fosmodel.study.harness import StudyConfig, StudyResult
 from fosmodel.study.report import paper_table, write_study
 from fosmodel.study.runner import run_study
-from fosmodel.workflows.imu import in_workers
+from fosmodel.typeset.markdown import markdown_table
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"

@@ -24,7 +24,6 @@ from numpy.polynomial import Polynomial
 from data_synth import make_scenario
 from data_synth.scenarios import CC300_ACCEL_VRW, CC300_GYRO_ARW, CC300_TEMPS_C
 from fosmodel.io.output import write_text
-from fosmodel.models.summary import markdown_table
 from fosmodel.study.report import save_figure, write_tables
 from fosmodel.study.temperature import (
     concatenate_plateaus,
@@ -36,6 +35,7 @@ from fosmodel.study.temperature import (
     temperature_segments,
     term_standard_errors,
 )
+from fosmodel.typeset.markdown import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "temperature_chamber"
 #: sensor: scenario, units, seed 001 Table 1 noise, seed.  The two scenarios draw their white

@@ -31,14 +31,9 @@ from data_synth.units import (
 )
 from fosmodel import cli
 from fosmodel.core.exceptions import InputError
-from fosmodel.noise.allan import (
-    FLICKER_FLOOR,
-    TERMS,
-    allan_deviation,
-    allan_figure,
-    fit_noise,
-    readoff,
-)
+from fosmodel.noise.allan import FLICKER_FLOOR, allan_deviation, readoff
+from fosmodel.noise.allan_fit import TERMS, fit_noise
+from fosmodel.noise.allan_report import allan_figure
 
 THREE_SIGMA = 0.9973
 

@@ -13,7 +13,8 @@ from scipy.signal import lfilter
 from data_synth import BiasInstability, GaussMarkov, RandomWalk, WhiteNoise, compose
 from fosmodel import cli
 from fosmodel.core.exceptions import InputError
-from fosmodel.noise.allan import FLICKER_FLOOR, allan_deviation, fit_noise
+from fosmodel.noise.allan import FLICKER_FLOOR, allan_deviation
+from fosmodel.noise.allan_fit import fit_noise
 
 ADIS = Path(__file__).resolve().parents[2] / "shared" / "data" / "adis16405"
 N_TRUE, B_TRUE, K_TRUE = 0.003, 0.001, 8e-5  # deg/s*sqrt(s), deg/s, deg/s/sqrt(s)

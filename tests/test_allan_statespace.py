@@ -21,7 +21,8 @@ from fosmodel.filter.allan_statespace import (
 )
 from fosmodel.filter.kalman import KalmanFilter, run_filter
 from fosmodel.filter.statespace import position_velocity_error_model
-from fosmodel.noise.allan import AllanResult, NoiseFit, allan_deviation, fit_noise
+from fosmodel.noise.allan import AllanResult, allan_deviation
+from fosmodel.noise.allan_fit import NoiseFit, fit_noise
 
 RATE = 20.0
 # ADIS16405-accelerometer-like terms in m/s^2 units (N m/s/sqrt(s), B m/s^2, K m/s^2/sqrt(s))

@@ -18,7 +18,7 @@ from fosmodel.models.baselines import (
     _to_dynamics,
     make_baseline,
 )
-from fosmodel.models.summary import Summary
+from fosmodel.typeset.summary import Summary
 
 METHODS = ["yule_walker", "covariance", "burg"]
 PHI2 = np.array([1.5, -0.7])                                    # roots of modulus 0.84

@@ -11,11 +11,13 @@ from scipy.signal import lfilter
 from fosmodel.io.output import FIGURE_DPI, save_figure
 from fosmodel.loop.closeloop import LoopConfig, close_loop
 from fosmodel.loop.loop_report import residual_figure
-from fosmodel.models.latex import mathtext_units
-from fosmodel.noise.allan import allan_deviation, allan_figure, fit_noise
+from fosmodel.noise.allan import allan_deviation
+from fosmodel.noise.allan_fit import fit_noise
+from fosmodel.noise.allan_report import allan_figure
 from fosmodel.study.harness import StudyConfig
 from fosmodel.study.report import order_figure
 from fosmodel.study.runner import run_study
+from fosmodel.typeset.latex import mathtext_units
 
 
 def _labels(axis) -> list[str]:

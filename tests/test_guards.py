@@ -149,7 +149,7 @@ def test_a_backward_time_fails_in_its_block_with_its_line(tmp_path, monkeypatch)
     """Across a block boundary and inside a later block, the line named is the file's."""
     monkeypatch.setattr("fosmodel.io.loader.CHUNK_ROWS", 1000)
     calls = []
-    monkeypatch.setattr("fosmodel.io.loader._check_finite",
+    monkeypatch.setattr("fosmodel.io.values._check_finite",
                         lambda *a, **k: calls.append(a))  # reached only after every block
     for bad_row in (1000, 2500):  # the first row of block 2, and one inside block 3
         time = np.arange(5000) / 100.0

@@ -23,13 +23,15 @@ from scipy.signal import lfilter
 from fosmodel.io.output import write_tables
 from fosmodel.loop.closeloop import LoopConfig, close_loop
 from fosmodel.loop.loop_report import write_loop_report
-from fosmodel.models.latex import latex_number, latex_table, latex_text, table_label
 from fosmodel.models.model import FOSModel
-from fosmodel.noise.allan import allan_deviation, fit_noise, write_allan
+from fosmodel.noise.allan import allan_deviation
+from fosmodel.noise.allan_fit import fit_noise
+from fosmodel.noise.allan_report import write_allan
 from fosmodel.noise.imu_noise import Axis, imu_noise, write_imu_noise
 from fosmodel.study.files import ColumnStudy, write_reports
 from fosmodel.study.harness import StudyConfig, plan_study
 from fosmodel.study.runner import run_study
+from fosmodel.typeset.latex import latex_number, latex_table, latex_text, table_label
 
 PDFLATEX = shutil.which("pdflatex")
 DOCUMENT = ("\\documentclass{article}\n\\usepackage{booktabs}\n\\begin{document}\n%s\n"

@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from fosmodel.core.exceptions import InputError
-from fosmodel.io import loader
+from fosmodel.io import loader, timebase, values
 from fosmodel.io.loader import load_record, parse_scales
 
 
@@ -448,8 +448,8 @@ def test_a_record_over_the_memory_budget_is_refused_at_its_first_block(tmp_path,
     monkeypatch.setattr(loader, "CHUNK_ROWS", 100)
     monkeypatch.setenv("FOSMODEL_MAX_MEMORY", "20000")
     converted = []
-    real = loader._numeric
-    monkeypatch.setattr(loader, "_numeric", lambda *a: converted.append(a[2]) or real(*a))
+    real = values._numeric
+    monkeypatch.setattr(values, "_numeric", lambda *a: converted.append(a[2]) or real(*a))
     width = 6 if name == "w.npy" else 7
     with pytest.raises(InputError, match=rf"^{tmp_path / name}: too large to read: 1,000 rows of "
                        rf"{width} column\(s\) take 0.0 GiB as float64, more than the 0.0 GiB "
@@ -506,7 +506,7 @@ def test_structured_npy_equals_its_fields(tmp_path, monkeypatch):
 def test_tenths_equal_numpy_histogram(seed):
     rng = np.random.default_rng(seed)
     time = np.sort(np.concatenate([rng.uniform(0, 7, 500), np.linspace(0, 7, 11)]))  # edges too
-    np.testing.assert_array_equal(loader._tenths(time), np.histogram(time, bins=10)[0])
+    np.testing.assert_array_equal(timebase._tenths(time), np.histogram(time, bins=10)[0])
 
 
 @pytest.mark.parametrize("gaps, offered", [("refuse", " or --segments to fit on the pieces"),

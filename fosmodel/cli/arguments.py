@@ -11,12 +11,12 @@ import re
 
 import numpy as np
 
-from ..io.loader import OUTLIER_K, OUTLIER_MODES
+from ..io.formats import FORMATS, described
+from ..io.outliers import OUTLIER_K, OUTLIER_MODES
 from .parsing import Refused
 
 #: What a record argument may be.
-RECORD_HELP = ("record: CSV, .npy, .parquet, a ROS bag (.bag, a ROS 2 bag directory, .db3, "
-               ".mcap) or a PX4 ULog (.ulg)")
+RECORD_HELP = f"record: {described(FORMATS)}"
 
 
 def exog_arg(text: str) -> list[tuple[str, int]]:

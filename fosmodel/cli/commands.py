@@ -326,7 +326,9 @@ def allan(args: argparse.Namespace) -> int:
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     if args.columns:
         return _allan_axes(args, out, json_path)
-    from ..noise.allan import allan_deviation, fit_noise, write_allan
+    from ..noise.allan import allan_deviation
+    from ..noise.allan_fit import fit_noise
+    from ..noise.allan_report import write_allan
 
     rec = _load(args, columns=[args.column])
     axis = _axes(args, [args.column], rec, optional=True)

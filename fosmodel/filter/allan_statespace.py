@@ -1,9 +1,9 @@
 """Allan-variance noise terms as a low-order state-space error model, per axis and per IMU.
 
 :func:`allan_state_space` turns the IEEE Std 952 coefficients of
-:func:`fosmodel.noise.allan.fit_noise` into the error model a navigation filter usually carries for
-each sensor axis: white noise, a first-order Gauss-Markov bias for the bias instability and a
-random-walk bias::
+:func:`fosmodel.noise.allan_fit.fit_noise` into the error model a navigation filter usually
+carries for each sensor axis: white noise, a first-order Gauss-Markov bias for the bias
+instability and a random-walk bias::
 
     x = [white, gauss-markov bias, random-walk bias],   y[n] = H x[n] + mu,   H = [1, 1, 1]
     white[n] = w0[n]                              var(w0) = N^2 rate
@@ -41,7 +41,8 @@ from numpy.typing import ArrayLike
 from scipy.linalg import block_diag
 
 from ..core.exceptions import InputError
-from ..noise.allan import FLICKER_FLOOR, NoiseFit
+from ..noise.allan import FLICKER_FLOOR
+from ..noise.allan_fit import NoiseFit
 from .statespace import StateSpace
 
 #: Averaging time of the Gauss-Markov Allan deviation's peak, in correlation times: the
@@ -63,7 +64,7 @@ class TermValue(NamedTuple):
     """The value of a noise term the model uses, and where it comes from."""
 
     value: float
-    """In the record's units (see :attr:`fosmodel.noise.allan.NoiseFit.coefficients`)."""
+    """In the record's units (see :attr:`fosmodel.noise.allan_fit.NoiseFit.coefficients`)."""
     source: str
     """``"fitted"``, ``"upper limit"`` (not resolved) or why the term is not carried."""
 
@@ -71,7 +72,7 @@ class TermValue(NamedTuple):
 def model_terms(fit: NoiseFit) -> dict[str, TermValue]:
     """Return the value of each fitted term that :func:`allan_state_space` uses, and its source.
 
-    :meth:`~fosmodel.noise.allan.NoiseFit.conservative`: a resolved term gives its fitted
+    :meth:`~fosmodel.noise.allan_fit.NoiseFit.conservative`: a resolved term gives its fitted
     coefficient, one that is not resolved its upper limit: the conservative choice for a filter,
     which then claims at most that much more uncertainty than the data support, where the
     fitted value (often zero) would let it trust a bias it cannot see.  Quantization, the rate
@@ -80,7 +81,7 @@ def model_terms(fit: NoiseFit) -> dict[str, TermValue]:
     Parameters
     ----------
     fit : NoiseFit
-        From :func:`fosmodel.noise.allan.fit_noise`.
+        From :func:`fosmodel.noise.allan_fit.fit_noise`.
 
     Returns
     -------
@@ -169,14 +170,14 @@ def allan_state_space(fit: NoiseFit, mu: float = 0.0) -> StateSpace:
     resolved).  ``N`` gives the white state, ``B`` the Gauss-Markov bias of
     :func:`gauss_markov_for_flicker` placed at :func:`flicker_tau` of the ``N`` and ``K``
     used, ``K`` the random-walk bias (module docstring).  A term the fit did not include
-    (``terms=`` of :func:`~fosmodel.noise.allan.fit_noise`) has no state, and its name is missing
-    from ``state_names``; quantization, the rate ramp and the sinusoid get none either
+    (``terms=`` of :func:`~fosmodel.noise.allan_fit.fit_noise`) has no state, and its name is
+    missing from ``state_names``; quantization, the rate ramp and the sinusoid get none either
     (:data:`NOT_CARRIED`).
 
     Parameters
     ----------
     fit : NoiseFit
-        From :func:`fosmodel.noise.allan.fit_noise`; its record's rate is the model's.
+        From :func:`fosmodel.noise.allan_fit.fit_noise`; its record's rate is the model's.
     mu : float
         Mean of the output (the calibrated bias), which an Allan fit does not hold.
 

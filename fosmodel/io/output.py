@@ -29,8 +29,8 @@ from typing import IO, TYPE_CHECKING
 import numpy as np
 
 from ..core.exceptions import InputError
-from ..models.latex import latex_table, table_label
-from ..models.summary import markdown_table
+from ..typeset.latex import latex_table, table_label
+from ..typeset.markdown import markdown_table
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -263,7 +263,7 @@ def write_tables(frame: pd.DataFrame, out_dir: Path, stem: str, caption: str | N
         The LaTeX table's caption (default: the stem in words).
     report : str, optional
         The report's name or title: the LaTeX label is ``tab:fosmodel-<report>-<stem>``
-        (:func:`fosmodel.models.latex.table_label`), the same on every run.
+        (:func:`fosmodel.typeset.latex.table_label`), the same on every run.
 
     Returns
     -------

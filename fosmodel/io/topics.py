@@ -13,20 +13,18 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..core.exceptions import InputError
-from .rosbag import bag_imu_topics, is_bag, read_bag
+from .formats import LOGS, LogFormat, described, log_format
 from .sensor_log import ImuTopic, SensorLog, TopicError
-from .ulog import SUFFIX, read_ulog, ulog_imu_topics
 
 __all__ = ["ImuTopic", "SensorLog", "TopicError", "imu_topics", "is_sensor_log", "read_topic"]
 
 #: What :func:`read_topic` reads, for messages.
-FORMATS = "a ROS bag (.bag, a ROS 2 bag directory, .db3, .mcap) or a PX4 ULog file (.ulg)"
+FORMATS = described(LOGS)
 
 
 def is_sensor_log(path: str | Path) -> bool:
     """Tell whether ``path`` names a log by its suffix, or is a ROS 2 bag directory."""
-    path = Path(path)
-    return path.suffix.lower() == SUFFIX or is_bag(path)
+    return log_format(Path(path)) is not None
 
 
 def imu_topics(path: str | Path) -> list[ImuTopic]:
@@ -52,8 +50,8 @@ def imu_topics(path: str | Path) -> list[ImuTopic]:
     InputError
         A missing, damaged or unknown file, or the reader's extra not installed.
     """
-    path = _existing(path)
-    return ulog_imu_topics(path) if path.suffix.lower() == SUFFIX else bag_imu_topics(path)
+    path, found = _existing(path)
+    return found.imu_topics(path)
 
 
 def read_topic(path: str | Path, topic: str | None = None,
@@ -83,16 +81,15 @@ def read_topic(path: str | Path, topic: str | None = None,
     InputError
         No IMU topic, a damaged or unknown file, or the reader's extra not installed.
     """
-    path = _existing(path)
-    if path.suffix.lower() == SUFFIX:
-        return read_ulog(path, topic, temperature_topic)
-    return read_bag(path, topic, temperature_topic)
+    path, found = _existing(path)
+    return found.read(path, topic, temperature_topic)
 
 
-def _existing(path: str | Path) -> Path:
+def _existing(path: str | Path) -> tuple[Path, LogFormat]:
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: no such file")
-    if not is_sensor_log(path):
+    found = log_format(path)
+    if found is None:
         raise InputError(f"{path}: not {FORMATS}")
-    return path
+    return path, found

@@ -68,6 +68,11 @@ FIELDS: dict[str, dict[str, tuple[str, str | None]]] = {
 }
 
 
+def is_ulog(path: Path) -> bool:
+    """Tell whether ``path`` names a ULog file, by its suffix (of any case)."""
+    return path.suffix.lower() == SUFFIX
+
+
 def ulog_imu_topics(path: Path) -> list[ImuTopic]:
     """List the log's IMU topics, their rates from their time stamps."""
     named = _named(_load(path, FIELDS)[0])

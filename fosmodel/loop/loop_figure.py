@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..models.latex import mathtext_units
+from ..typeset.latex import mathtext_units
 from .closeloop import LoopResult
 from .diagnose import Finding
 

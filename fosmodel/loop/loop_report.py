@@ -8,7 +8,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..io.output import save_figure, write_tables, write_text
-from ..models.summary import markdown_table
+from ..typeset.markdown import markdown_table
 from .closeloop import REPORT_WINDOWS, LoopResult
 from .diagnose import Finding
 from .intervals import ratios

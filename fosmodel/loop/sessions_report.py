@@ -9,7 +9,7 @@ from typing import Any
 import pandas as pd
 
 from ..io.output import save_figure, write_tables, write_text
-from ..models.summary import markdown_table
+from ..typeset.markdown import markdown_table
 from .intervals import Ratio
 from .judge import MIN_WINDOWS
 from .loop_figure import residual_figure

@@ -3,7 +3,7 @@
 ``FOSModel`` (a FOS difference equation of a time series, also in the raw signals), the
 scikit-learn ``FOSRegressor`` and the ``NARXFeatures`` that feed it lagged candidates, the
 AR and Gauss-Markov baselines (also about a local level), their shared linear dynamics and
-free runs, and the text summaries they print.
+free runs.
 
-Imports :mod:`fosmodel.core` only.
+Imports :mod:`fosmodel.core` and :mod:`fosmodel.typeset` (the summaries they print) only.
 """

@@ -29,6 +29,7 @@ from statsmodels.tsa.ar_model import AutoReg
 from .._version import __version__
 from ..core.exceptions import InputError
 from ..core.validation import as_signal, check_fitted, check_int, did_you_mean
+from ..typeset.summary import Summary
 from .dynamics import (
     ar_free_run,
     ar_one_step,
@@ -38,7 +39,6 @@ from .dynamics import (
     is_stable,
     warn_if_unstable,
 )
-from .summary import Summary
 
 FORMAT_VERSION = 1
 

@@ -61,6 +61,7 @@ from ..core.levels import (
     with_levels,
 )
 from ..core.validation import as_channels, as_signal, check_fitted
+from ..typeset.summary import Summary
 from .compensation import (
     check_compensation,
     compensation_channels,
@@ -76,7 +77,6 @@ from .dynamics import (
 )
 from .freerun import run_many, run_one, split_expansion
 from .rawform import expand_centred
-from .summary import Summary
 
 log = logging.getLogger(__name__)
 

@@ -1,7 +1,7 @@
 """The noise parameters of a whole IMU: every axis's Allan fit, and the files filters read.
 
 :func:`imu_noise` runs :func:`fosmodel.noise.allan.allan_deviation` and
-:func:`fosmodel.noise.allan.fit_noise` on each column of a record (three gyros and
+:func:`fosmodel.noise.allan_fit.fit_noise` on each column of a record (three gyros and
 three accelerometers, say); :class:`ImuNoise` sets the axes side by side in
 one table and one figure per sensor type, and writes them in SI in the forms
 people paste into a filter or a VIO configuration:
@@ -59,9 +59,11 @@ from matplotlib.figure import Figure
 from .._version import __version__
 from ..core.exceptions import InputError
 from ..io.output import save_figure, write_tables, write_text
-from ..models.latex import mathtext_units
-from ..models.summary import Summary
-from .allan import AllanResult, NoiseFit, allan_deviation, fit_noise, write_allan
+from ..typeset.latex import mathtext_units
+from ..typeset.summary import Summary
+from .allan import AllanResult, allan_deviation
+from .allan_fit import NoiseFit, fit_noise
+from .allan_report import write_allan
 from .axes import SENSORS, Axis
 from .metrics import to_si_scale
 

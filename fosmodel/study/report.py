@@ -15,8 +15,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from ..io.output import save_figure, write_tables, write_text
-from ..models.latex import mathtext_units
-from ..models.summary import markdown_table
+from ..typeset.latex import mathtext_units
+from ..typeset.markdown import markdown_table
 from .harness import LEVEL, StudyResult, method_label
 
 _ORDER = ["yw", "cov", "burg", "gm", "fos"]

@@ -35,7 +35,8 @@ from ..core.exceptions import InputError
 from ..core.validation import as_signal
 from ..models.bound import BoundModel
 from ..models.model import FOSModel
-from ..noise.allan import allan_deviation, fit_noise
+from ..noise.allan import allan_deviation
+from ..noise.allan_fit import fit_noise
 from ..noise.metrics import one_step_mse, outage_metrics
 
 TEMP, TEMP_SQ = "temp_c", "temp_c_sq"

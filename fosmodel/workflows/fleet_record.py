@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from ..io.formats import SUFFIXES
 from ..io.loader import load_record
 from ..io.output import report_directory
 from ..io.record import Record
@@ -39,9 +40,6 @@ _T = TypeVar("_T")
 
 #: The completion marker of a record's folder in the store.
 MARKER = "done.json"
-#: Suffixes of the formats and compressions a record's name in the store leaves out.
-_SUFFIXES = {".gz", ".bz2", ".xz", ".zst", ".zip", ".csv", ".txt", ".npy", ".parquet", ".bag",
-             ".db3", ".mcap", ".ulg"}
 
 
 @dataclass(frozen=True)
@@ -82,9 +80,12 @@ class FleetConfig:
 
 
 def record_name(path: str | os.PathLike[str]) -> str:
-    """Return a record's name in the store: its file name without the format's suffixes."""
+    """Return a record's name in the store: its file name without the format's suffixes.
+
+    Those are its format's and its compression's (:data:`fosmodel.io.formats.SUFFIXES`).
+    """
     name = Path(path).name
-    while Path(name).suffix.lower() in _SUFFIXES and Path(name).stem:
+    while Path(name).suffix.lower() in SUFFIXES and Path(name).stem:
         name = Path(name).stem
     return name
 

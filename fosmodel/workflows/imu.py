@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from ..core.exceptions import InputError
+from ..core.parallel import in_workers
 from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_covariance
 from ..filter.statespace import StateSpace
 from ..io.record import Record
@@ -302,24 +303,6 @@ def _run_tasks(channels: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: f
     tasks = [(_task, (step, a.column, channels, a, axes, rate, config))
              for step in ("loop", "study") for a in axes]
     yield from in_workers(tasks, config.n_jobs, ordered=False)
-
-
-def in_workers(calls: Iterable[tuple[Callable[..., Any], tuple]], n_jobs: int,
-               ordered: bool = True) -> Iterator[Any]:
-    """Yield ``function(*args)`` of every call, ``n_jobs`` at a time in worker processes.
-
-    ``n_jobs`` 1 runs them here, one after the other.  The results come in the calls' order,
-    or as they end when not ``ordered`` (a result then says what it is).  Each worker gets
-    one BLAS thread (joblib's default for as many processes as cores), and large arrays are
-    memory-mapped to the workers, not copied per call.
-    """
-    if n_jobs == 1:
-        yield from (function(*args) for function, args in calls)
-        return
-    from joblib import Parallel, delayed
-
-    run = Parallel(n_jobs=n_jobs, return_as="generator" if ordered else "generator_unordered")
-    yield from run(delayed(function)(*args) for function, args in calls)
 
 
 def _brief(step: str, outcome: StudyResult | LoopResult) -> str:

@@ -25,16 +25,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..core.parallel import in_workers
 from ..io.model_file import write_model
 from ..io.output import write_tables, write_text
 from ..loop.closeloop import LoopResult
 from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
-from ..models.summary import markdown_table
 from ..noise.axes import Axis
 from ..noise.imu_noise import ImuNoise, write_imu_noise
 from ..study.harness import StudyResult
 from ..study.report import write_study
-from .imu import AxisResult, ImuResult, in_workers
+from ..typeset.markdown import markdown_table
+from .imu import AxisResult, ImuResult
 
 
 def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]:

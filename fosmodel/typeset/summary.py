@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import pandas as pd
 
 from .latex import latex_table, latex_text, table_label
+from .markdown import markdown_table
 
 _WIDTH = 78
 
@@ -72,7 +73,7 @@ class Summary:
     def as_latex(self) -> str:
         """Return the facts and the table as two LaTeX tables, the notes as an ``enumerate``.
 
-        The tables come from :func:`~fosmodel.models.latex.latex_table` (booktabs rules, a
+        The tables come from :func:`~fosmodel.typeset.latex.latex_table` (booktabs rules, a
         caption, the labels ``tab:fosmodel-<title>-facts`` and ``tab:fosmodel-<title>``);
         every special character is escaped, units are typeset.
         """
@@ -84,20 +85,5 @@ class Summary:
             *(["\\begin{enumerate}", notes, "\\end{enumerate}", ""] if notes else [])])
 
 
-def markdown_table(frame: pd.DataFrame, digits: int = 6) -> str:
-    """Write a pipe table; floats with ``digits`` significant digits, NaN as an empty cell."""
-    cols = [str(c) for c in frame.columns]
-    rows = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    for rec in frame.itertuples(index=False):
-        rows.append("| " + " | ".join(_cell(v, digits) for v in rec) + " |")
-    return "\n".join(rows)
-
-
 def _fmt(v: float) -> str:
     return f"{v:.6g}"
-
-
-def _cell(v: object, digits: int = 6) -> str:
-    if isinstance(v, float):
-        return "" if v != v else f"{v:.{digits}g}"
-    return str(v)

@@ -2,7 +2,7 @@ r"""LaTeX for papers: escaped text with typeset units, numbers, and booktabs tab
 
 Every LaTeX table fosmodel writes goes through :func:`latex_table` (reports through
 :func:`fosmodel.io.output.write_tables`, fit summaries through
-:meth:`fosmodel.models.summary.Summary.as_latex`): a ``table`` float with a caption and a
+:meth:`fosmodel.typeset.summary.Summary.as_latex`): a ``table`` float with a caption and a
 stable label (:func:`table_label`), booktabs rules (``\toprule``, ``\midrule``,
 ``\bottomrule``), text with LaTeX's special characters escaped and units typeset
 (:func:`latex_text`: ``m/s^2`` as ``m/s$^{2}$``, ``deg/sqrt(h)`` as
