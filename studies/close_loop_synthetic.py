@@ -1,46 +1,64 @@
 """The residual loop on synthetic records with undeclared effects: the tables of the documentation
 (docs/pages/loop.md).
 
-For every loop scenario of data_synth the loop runs on seeds 0-9 (controls:
-0-19): the 5-minute records with one undeclared effect each (two at once in
-one), and the 15-minute records with slow errors (a bias random walk,
-warm-ups of 20, 60 and 180 s, a warm-up plus a linear drift, two bias steps,
-and a random walk or a drift with a temperature that drives the bias).
+Three parts, each a section of the page:
 
-For each record the table gives, for seed 0, what the loop kept and the
-prediction-segment error before the loop, after it, and with the true effects
-added to the same starting model (one-step MSE for fast effects, outage MSE
-for slow ones); and over the seeds how often each true effect was *named*
-(the loop kept that kind of effect: the channel, the line, the drift, the
-step), how often a slow one was at least *followed* (named, or taken as the
-local level, the stochastic form of a wandering bias), what else was kept,
-and in how many seeds the prediction segment's 30 s bias RMS ended lower.
-Full reports for seed 0 go to ``studies/results/close_loop/<record>/``; the
-Section ``close-loop-synthetic`` of docs/pages/loop.md is rewritten from this run.
+* ``close-loop-synthetic``: every short loop scenario of data_synth on seeds 0-9
+  (controls: 0-19): the 5-minute records with one undeclared effect each (two at
+  once in one) and the 15-minute records with slow errors.  For seed 0 what the loop
+  kept and the prediction-segment error before the loop, after it, and with the true
+  effects added to the same starting model (the 30 s outage MSE for slow effects,
+  the one-step MSE for fast ones); over the seeds how often each true effect was
+  *named* (the loop kept that kind of effect: the driver, the line, the drift, the
+  step), how often a slow one was at least *followed* (named, or taken as the local
+  level), what else was kept, and in how many seeds the 30 s bias RMS ended lower.
+* ``close-loop-sweeps``: one IMU at 1 Hz whose gx_dps and ax_mps2 biases follow the
+  temperature (data_synth's ``temperature_sweep``, ``temperature_sweep_lag`` with a
+  30 min thermal lag, and three day-long ``temperature_sessions``), seeds 0-9: the
+  temperature named, the 30 min outage bias RMS of the prediction segment (of every
+  session's predicted part, pooled) against the starting model with the level alone,
+  and their controls (no temperature effect, the same draws), seeds 0-19.
+* ``close-loop-companions``: six axes whose noise is correlated across the gyros and
+  across the accelerometers (``companion_noise``): the other axes of each one's kind
+  are never inputs, and their correlation with the residual is reported beside the
+  truth.
 
-Run: ``python studies/close_loop_synthetic.py`` (about ten minutes).
+Full reports for seed 0 go to ``studies/results/close_loop/<record>/``.
+
+Run: ``python studies/close_loop_synthetic.py [--jobs N]`` (about half an hour on 2 workers).
 """
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pandas as pd
 from doc_pages import README, replace_section, show_figure
 
-from data_synth import make_scenario
+from data_synth import make_scenario, make_sessions
 from data_synth.true_effects import true_effects
+from fosmodel.core import in_workers, power_name
 from fosmodel.loop import (
     CandidateFamily,
     Effect,
     LoopConfig,
+    LoopRecord,
+    Session,
     close_loop,
+    close_sessions,
+    make,
     score_family,
+    score_sessions,
     write_loop_report,
+    write_sessions_report,
 )
 from fosmodel.typeset import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "close_loop"
+JOBS = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 2
 # (record name, scenario, overrides)
 EFFECTS = [(name, name, {}) for name in (
     "undeclared_temperature", "undeclared_vibration", "undeclared_nonlinear",
@@ -53,6 +71,35 @@ EFFECTS += [(name, name, {}) for name in ("slow_warmup_drift", "slow_steps",
                                           "slow_warmup_drift_temperature")]
 CONTROLS = ["clean", "unrelated_temperature", "slow_clean", "slow_unrelated_temperature"]
 SEEDS, CONTROL_SEEDS = range(10), range(20)
+#: The day-long records: (label, scenario, column, its sensor and units).
+SWEEPS = [("one day, gx_dps", "temperature_sweep", "gx_dps"),
+          ("one day, ax_mps2", "temperature_sweep", "ax_mps2"),
+          ("one day, 30 min thermal lag, gx_dps", "temperature_sweep_lag", "gx_dps"),
+          ("three days, gx_dps", "temperature_sessions", "gx_dps"),
+          ("three days, ax_mps2", "temperature_sessions", "ax_mps2")]
+SWEEP_CONTROLS = [("one day, control", "temperature_sweep_control", "gx_dps"),
+                  ("three days, control", "temperature_sessions_control", "gx_dps")]
+UNITS = {"g": ("gyro", "deg/s"), "a": ("accel", "m/s^2")}
+
+
+# -- the short records -----------------------------------------------------------------------
+
+
+def loop_truth(truth: dict) -> list[tuple[Effect, bool]]:
+    """The undeclared effects as the loop names them: a temperature bias as a driver's slow
+    part with its true forms and weights, another channel's input as a driver's fast part."""
+    bias = {s["params"]["input"]: s["params"] for s in truth["sources"]
+            if s["kind"] == "temperature_bias" and not s["declared"]}
+    out = []
+    for effect, slow in true_effects(truth):
+        channel = getattr(effect, "channel", None)
+        if effect.kind == "driver" and channel in bias:
+            p = bias[channel]
+            effect = make("driver", channel=channel, part="slow",
+                          forms=[[power_name(channel, k, p["t_ref_c"]), c]
+                                 for k, c in enumerate(p["coefs"]) if k and c])
+        out.append((effect, slow))
+    return out
 
 
 def run(scenario: str, seed: int, **overrides):
@@ -63,25 +110,26 @@ def run(scenario: str, seed: int, **overrides):
     return rec, y, channels, config, close_loop(y, channels, config)
 
 
-def truth_metrics(rec, y, channels, config, res):
-    """Prediction-segment metrics of the starting model with the true effects added (a
-    random walk as the level the loop would offer)."""
+def truth_metrics(rec, y, channels, config, res) -> dict:
+    """Prediction-segment numbers of the starting model with the true effects added (a
+    random walk as the level the loop offers)."""
+    record = LoopRecord.single(y, channels, config.rate)
     family = CandidateFamily(config.max_lag)
-    for effect, _ in true_effects(rec.truth):
+    for effect, _ in loop_truth(rec.truth):
         if effect.kind == "level":
-            effect = Effect("level", taus=res.level_taus)
-        family = family.add(effect, channels, len(y), config.rate, res.segments.train)
+            effect = make("level", taus=res.level_taus)
+        family = family.add(effect, record)
     return score_family(y, channels, config, family)
 
 
-def names(step_effect, true) -> bool:
+def names(kept: Effect, true: Effect) -> bool:
     """Whether a kept effect is the true one: its kind, and its channel or frequency."""
-    if step_effect.kind != true.kind:
+    if kept.kind != true.kind:
         return False
-    if true.kind == "aux":
-        return step_effect.channel == true.channel
+    if true.kind == "driver":
+        return getattr(kept, "channel", None) == getattr(true, "channel", None)
     if true.kind == "periodic":
-        return abs(step_effect.freq_hz - true.freq_hz) < 0.05
+        return abs(getattr(kept, "freq_hz", 0) - getattr(true, "freq_hz", 0)) < 0.05
     return True
 
 
@@ -92,73 +140,198 @@ def describe(step) -> str:
     return text + (f", lag {step.lag}" if step.lag is not None else "")
 
 
-def _tally(res, truths) -> tuple[int, int, int]:
-    """(true effects named, slow ones at least followed, other effects kept)."""
+def effect_seed(label: str, scenario: str, overrides: dict, seed: int) -> dict[str, Any]:
+    """One seed of a short record: what was named, and (seed 0) its row and report."""
+    rec, y, channels, config, res = run(scenario, seed, **overrides)
+    truths = loop_truth(rec.truth)
     kept = [s.effect for s in res.steps]
     level = any(e.kind == "level" for e in kept)
     named = [any(names(e, t) for e in kept) for t, _ in truths]
     followed = [n or (slow and level) for n, (_, slow) in zip(named, truths)]
     others = [e for e in kept if not any(names(e, t) for t, _ in truths)
               and not (e.kind == "level" and any(slow for _, slow in truths))]
-    return sum(named), sum(followed), len(others)
+    out = {"named": all(named), "followed": all(followed), "others": bool(others),
+           "lower": res.after["bias_rms"].get("30", np.inf)
+           < res.before["bias_rms"].get("30", -np.inf)}
+    if seed == 0:
+        folder = scenario + "".join(f"_{v:g}s" for v in overrides.values())
+        write_loop_report(res, OUT / folder, f"{label} (seed 0)")
+        slow = any(s for _, s in truths)
+
+        def metric(m: dict) -> float:
+            return m["outage_mse"]["30"] if slow else m["mse"]
+
+        true = metric(truth_metrics(rec, y, channels, config, res))
+        before, after = metric(res.before), metric(res.after)
+        out["row"] = {"Record": label, "Kept (seed 0)": "; ".join(map(describe, res.steps))
+                      or "none", "Metric": "30 s outage MSE" if slow else "one-step MSE",
+                      "Before": before, "After": after, "True model": true,
+                      "Share of the true gain": (before - after) / (before - true)}
+    return out
 
 
-def effect_row(label: str, scenario: str, overrides: dict) -> dict:
-    counts = {"named": 0, "followed": 0, "others": 0, "lower": 0}
-    for seed in SEEDS:
-        rec, y, channels, config, res = run(scenario, seed, **overrides)
-        truths = true_effects(rec.truth)
-        named, followed, others = _tally(res, truths)
-        counts["named"] += named == len(truths)
-        counts["followed"] += followed == len(truths)
-        counts["others"] += others > 0
-        counts["lower"] += res.after["bias_rms"]["30"] < res.before["bias_rms"]["30"]
-        if seed == 0:
-            folder = scenario + "".join(f"_{v:g}s" for v in overrides.values())
-            write_loop_report(res, OUT / folder, f"{label} (seed 0)")
-            slow = any(s for _, s in truths)
-            metric = "outage_mse" if slow else "mse"
-            true = truth_metrics(rec, y, channels, config, res)[metric]
-            row = {"Record": label, "Kept (seed 0)": "; ".join(map(describe, res.steps)) or "none",
-                   "Metric": "outage MSE" if slow else "one-step MSE",
-                   "Before": res.before[metric], "After": res.after[metric], "True model": true,
-                   "Share of the true gain": (res.before[metric] - res.after[metric])
-                   / (res.before[metric] - true)}
-    n = len(SEEDS)
-    row["Named in seeds 0-9"] = f"{counts['named']}/{n}"
-    row["Followed (named or as a level)"] = f"{counts['followed']}/{n}"
-    row["Seeds with other effects kept"] = f"{counts['others']}/{n}"
-    row["30 s bias RMS lower (prediction)"] = f"{counts['lower']}/{n}"
-    return row
+def control_seed(name: str, seed: int) -> dict[str, Any]:
+    _, _, _, _, res = run(name, seed)
+    return {"added": bool(res.steps), "worse": bool(res.worse())}
 
 
-def control_row(name: str) -> dict:
-    added, worst = 0, 0.0
-    for seed in CONTROL_SEEDS:
-        _, _, _, _, res = run(name, seed)
-        added += bool(res.steps)
-        worst = max(worst, res.after["mse"] / res.before["mse"] - 1)
-    return {"Record": name, "Records where an effect was added":
-            f"{added}/{len(CONTROL_SEEDS)}",
-            "Largest one-step MSE increase": f"{100 * worst:.2f} %"}
+# -- the day-long records ---------------------------------------------------------------------
+
+
+def _config(column: str, rate: float) -> LoopConfig:
+    sensor, units = UNITS[column[0]]
+    return LoopConfig(rate=rate, sensor=sensor, units=units)
+
+
+def sweep_seed(label: str, scenario: str, column: str, seed: int) -> dict[str, Any]:
+    """One seed of a day-long record or of three: the driver named, the 30 min bias against
+    the level alone, and (seed 0) the report."""
+    sessions = make_sessions(scenario, seed=seed)
+    config = _config(column, sessions[0].rate)
+    if len(sessions) > 1:
+        res: Any = close_sessions([Session(r.columns[column], {k: v for k, v in r.columns.items()
+                                                                if k != column}, f"day {i + 1}")
+                                   for i, r in enumerate(sessions)], config)
+        level = score_sessions([Session(r.columns[column], {k: v for k, v in r.columns.items()
+                                                             if k != column})
+                                for r in sessions], config, [make("level",
+                                                                  taus=res.level_taus)])
+        write = write_sessions_report
+    else:
+        rec = sessions[0]
+        y, channels = rec.columns[column], {k: v for k, v in rec.columns.items() if k != column}
+        res = close_loop(y, channels, config)
+        family = CandidateFamily(config.max_lag).add(make("level", taus=res.level_taus),
+                                                     LoopRecord.single(y, channels, rec.rate))
+        level = score_family(y, channels, config, family)
+        write = write_loop_report
+    kept = [s.effect for s in res.steps]
+    drivers = [e for e in kept if e.kind == "driver" and getattr(e, "channel", "") == "temp_c"]
+    after, alone = res.after["bias_rms"].get("1800"), level["bias_rms"].get("1800")
+    out = {"named": bool(drivers), "slow": any(e.part == "slow" for e in drivers),  # type: ignore
+           "lower": after is not None and alone is not None and after < alone,
+           "ratio": None if after is None or alone is None else after / alone,
+           "worse": bool(res.worse()), "kept": "; ".join(e.describe() for e in kept) or "none"}
+    if seed == 0:
+        write(res, OUT / f"{scenario}_{column}", f"{label} (seed 0)")
+    return out
+
+
+# -- companions ---------------------------------------------------------------------------------
+
+
+def companion_rows() -> list[dict[str, Any]]:
+    """Each axis of ``companion_noise`` (seed 0): its companions' correlation, and no input."""
+    rec = make_scenario("companion_noise", seed=0)
+    rows = []
+    for column in [c for c in rec.columns if c[0] in "ga"]:
+        config = _config(column, rec.rate)
+        res = close_loop(rec.columns[column], {k: v for k, v in rec.columns.items()
+                                               if k != column}, config)
+        inputs = [s.effect.describe() for s in res.steps if s.effect.kind == "companion"]
+        rows.append({"Axis": column, "Companions": ", ".join(res.roles.companions),
+                     "Taken as inputs": ", ".join(inputs) or "none",
+                     "Cross-axis correlation with the residual (lag)": "; ".join(
+                         f"{c['channel']} {c['rho']:+.2f} ({c['lag']})" for c in res.cross_axis),
+                     "True noise correlation": "; ".join(
+                         f"{k} {v:+.2f}" for k, v in _truth_corr(column).items()),
+                     "Effects kept": "; ".join(s.effect.describe() for s in res.steps)
+                     or "none"})
+        if column == "gx_dps":
+            write_loop_report(res, OUT / "companion_noise_gx_dps", "companion_noise gx_dps "
+                              "(seed 0)")
+    return rows
+
+
+def _truth_corr(column: str) -> dict[str, float]:
+    """The true equal-time correlation of ``column``'s shared noise with each other axis."""
+    from data_synth.imu import ACCEL_CORR, ACCELS, GYRO_CORR, GYROS
+
+    for axes, corr in ((GYROS, GYRO_CORR), (ACCELS, ACCEL_CORR)):
+        if column in axes:
+            i = axes.index(column)
+            return {a: corr[i][j] for j, a in enumerate(axes) if j != i}
+    return {}
+
+
+# -- the pages ----------------------------------------------------------------------------------
+
+
+def _tasks() -> list[tuple]:
+    """Every run as ``(key, function, arguments)``; the key is ``(part, record, seed)``."""
+    tasks = [(("effect", label, seed), effect_seed, (label, scenario, overrides, seed))
+             for label, scenario, overrides in EFFECTS for seed in SEEDS]
+    tasks += [(("control", name, seed), control_seed, (name, seed))
+              for name in CONTROLS for seed in CONTROL_SEEDS]
+    tasks += [(("sweep", label, seed), sweep_seed, (label, scenario, column, seed))
+              for label, scenario, column in [*SWEEPS, *SWEEP_CONTROLS]
+              for seed in (CONTROL_SEEDS if "control" in scenario else SEEDS)]
+    return tasks
 
 
 def main() -> None:
-    effects = pd.DataFrame([effect_row(*e) for e in EFFECTS])
-    controls = pd.DataFrame([control_row(name) for name in CONTROLS])
     OUT.mkdir(parents=True, exist_ok=True)
-    effects.to_csv(OUT / "effects_found.csv", index=False)
-    controls.to_csv(OUT / "controls.csv", index=False)
+    tasks = _tasks()
+    done = dict(zip((key for key, *_ in tasks),
+                    in_workers(((f, a) for _, f, a in tasks), JOBS)))
+    effects, controls, sweeps, sweep_controls = [], [], [], []
+    for label, _, _ in EFFECTS:
+        seeds = [done["effect", label, s] for s in SEEDS]
+        n = len(SEEDS)
+        effects.append({**seeds[0]["row"],
+                        "Named in seeds 0-9": f"{sum(s['named'] for s in seeds)}/{n}",
+                        "Followed (named or as a level)":
+                            f"{sum(s['followed'] for s in seeds)}/{n}",
+                        "Seeds with other effects kept": f"{sum(s['others'] for s in seeds)}/{n}",
+                        "30 s bias RMS lower (prediction)":
+                            f"{sum(s['lower'] for s in seeds)}/{n}"})
+    for name in CONTROLS:
+        seeds = [done["control", name, s] for s in CONTROL_SEEDS]
+        controls.append({"Record": name, "Records where an effect was added":
+                         f"{sum(s['added'] for s in seeds)}/{len(CONTROL_SEEDS)}",
+                         "Records worse on prediction":
+                         f"{sum(s['worse'] for s in seeds)}/{len(CONTROL_SEEDS)}"})
+    for label, _, _ in SWEEPS:
+        seeds = [done["sweep", label, s] for s in SEEDS]
+        ratios = [s["ratio"] for s in seeds if s["ratio"] is not None]
+        sweeps.append({"Record": label, "Kept (seed 0)": seeds[0]["kept"],
+                       "Temperature named": f"{sum(s['named'] for s in seeds)}/{len(SEEDS)}",
+                       "as its slow part": f"{sum(s['slow'] for s in seeds)}/{len(SEEDS)}",
+                       "30 min bias RMS lower than the level alone":
+                           f"{sum(s['lower'] for s in seeds)}/{len(SEEDS)}",
+                       "Its ratio to the level alone (median, range)":
+                           f"{np.median(ratios):.3g} ({min(ratios):.3g}-{max(ratios):.3g})"
+                           if ratios else "-",
+                       "Worse on prediction": f"{sum(s['worse'] for s in seeds)}/{len(SEEDS)}"})
+    for label, _, _ in SWEEP_CONTROLS:
+        seeds = [done["sweep", label, s] for s in CONTROL_SEEDS]
+        sweep_controls.append({"Record": label, "Temperature named":
+                               f"{sum(s['named'] for s in seeds)}/{len(CONTROL_SEEDS)}",
+                               "Worse on prediction":
+                               f"{sum(s['worse'] for s in seeds)}/{len(CONTROL_SEEDS)}"})
+    companions = companion_rows()
+    frames = {"effects_found": effects, "controls": controls, "sweeps": sweeps,
+              "sweep_controls": sweep_controls, "companions": companions}
+    for stem, rows in frames.items():
+        pd.DataFrame(rows).to_csv(OUT / f"{stem}.csv", index=False)
     rel = OUT.relative_to(README.parent)
     figure = show_figure(OUT / "slow_random_walk_temperature" / "residual.png",
                          "loop_residual.png")
     replace_section("close-loop-synthetic", "\n".join([
-        markdown_table(effects, digits=4), "", markdown_table(controls), "",
+        markdown_table(pd.DataFrame(effects), digits=4), "",
+        markdown_table(pd.DataFrame(controls)), "",
         f"Reports for seed 0, with their residual figures: `{rel}/<record>/report.md`.", "",
-        f"![a bias random walk with a temperature effect, seed 0]"
-        f"({figure})"]))
-    print(effects.to_string(index=False))
-    print(controls.to_string(index=False))
+        f"![a bias random walk with a temperature effect, seed 0]({figure})"]))
+    replace_section("close-loop-sweeps", "\n".join([
+        markdown_table(pd.DataFrame(sweeps), digits=3), "",
+        markdown_table(pd.DataFrame(sweep_controls)), "",
+        f"Reports for seed 0: `{rel}/temperature_sweep_gx_dps/report.md`, "
+        f"`{rel}/temperature_sessions_gx_dps/report.md`..."]))
+    replace_section("close-loop-companions", "\n".join([
+        markdown_table(pd.DataFrame(companions)), "",
+        f"Report of gx_dps: `{rel}/companion_noise_gx_dps/report.md`."]))
+    for rows in frames.values():
+        print(pd.DataFrame(rows).to_string(index=False))
 
 
 if __name__ == "__main__":

@@ -13,7 +13,10 @@ clear message where it is absent.  Writes every report, table and figure under
   with its Kalibr, MATLAB and JSON exports (``--allan`` runs this part alone,
   in about a minute).
 * Residual loop on every axis of the six ADIS16405 sessions, of both
-  MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped).
+  MPU-6050 records, and on the MTi-G gyro (outliers kept, then clipped): the
+  other axes of each one's kind are its companions (never inputs), the rest its
+  drivers; judged and reported at 30 s, 5 min and 30 min outages where the
+  segments hold them, every ratio with its interval.
 * The effects the issues point to, checked one by one.
 
 Run: ``python studies/real_data.py [--jobs N]``; the records are read on N worker processes
@@ -38,13 +41,16 @@ from fosmodel.core import in_workers
 from fosmodel.io import Record, load_mpu6050_static, load_record
 from fosmodel.loop import (
     CandidateFamily,
-    Effect,
+    DriverForms,
     LoopConfig,
+    LoopRecord,
     LoopResult,
     close_loop,
     evaluation_text,
     least_squares_spectrum,
+    make,
     score_family,
+    slow_driver,
     write_loop_report,
 )
 from fosmodel.noise import Axis, write_imu_noise
@@ -291,15 +297,29 @@ def write_allan_section(allan: pd.DataFrame) -> None:
 # -- residual loop ----------------------------------------------------------------------------
 
 
+#: The prediction-segment ratios of the loop table: (key of the ratio, column).
+RATIOS = (("mse", "One-step MSE after / before"),
+          ("outage_position_30s", "30 s outage position after / before"),
+          ("bias_rms_30s", "30 s bias RMS after / before"),
+          ("bias_rms_300s", "5 min bias RMS after / before"),
+          ("bias_rms_1800s", "30 min bias RMS after / before"))
+
+
 def loop_row(record: str, axis: str, res: LoopResult) -> dict:
-    b, a = res.before, res.after
-    return {"Record": record, "Axis": axis,
-            "Effects kept": "; ".join(_kept(s) for s in res.steps) or "none",
-            "Candidates rejected": len({r["effect"] for r in res.rejected}),
-            "One-step MSE after / before": a["mse"] / b["mse"],
-            "30 s outage position after / before": (a["outage_position_error_m"]
-                                                    / b["outage_position_error_m"]),
-            "30 s bias RMS after / before": a["bias_rms"]["30"] / b["bias_rms"]["30"]}
+    """An axis's loop: its effects, each ratio with its interval, what is worse, its inputs."""
+    found = {r.key: r for r in res.ratios()}
+    row = {"Record": record, "Axis": axis,
+           "Effects kept": "; ".join(_kept(s) for s in res.steps) or "none",
+           "Candidates rejected": len({r.effect.describe() for r in res.rejected})}
+    for key, column in RATIOS:
+        r = found.get(key)
+        row[column] = "-" if r is None else (
+            f"{r.value:.3g}" + ("" if r.low != r.low else f" ({r.low:.3g}-{r.high:.3g})"))
+    row["Worse (interval above 1)"] = "; ".join(r.name for r in found.values()
+                                                if r.verdict == "worse") or "none"
+    row["Companions as inputs"] = ", ".join(
+        s.effect.channel for s in res.steps if s.effect.kind == "companion") or "none"
+    return row
 
 
 def _kept(step) -> str:
@@ -340,22 +360,27 @@ def temperature_tasks(recs) -> list[Task]:
 
 def _temperature(axis: str, y: np.ndarray, temp: np.ndarray, rate: float, sensor: str,
                  units: str) -> dict:
-    """The starting model's scores with and without the die temperature, and their ratios."""
+    """The slow-driver test of the die temperature, and the starting model with and without
+    the forms it chose (as a compensation), on the prediction segment."""
     n10 = int(10 * rate)
     m = len(temp) // n10 * n10
     config = LoopConfig(rate=rate, sensor=sensor, units=units)
     channels = {"temp_c": temp}
+    record = LoopRecord.single(y, channels, rate)
+    fit = (slice(0, round(config.train * len(y))),)
+    finding = slow_driver(y, "temp_c", DriverForms(record, fit, config.slow_s), config.alpha)
     base = score_family(y, channels, config, CandidateFamily(config.max_lag))
-    family = CandidateFamily(config.max_lag).add(
-        Effect("aux", channel="temp_c", max_lag=2), channels, len(y), rate,
-        slice(0, round(config.train * len(y))))
-    warm = score_family(y, channels, config, family)
+    forms = finding.evidence["forms"]
+    warm = score_family(y, channels, config, CandidateFamily(config.max_lag).add(
+        make("driver", channel="temp_c", part="slow", forms=forms), record)) if forms else base
     means = y[:m].reshape(-1, n10).mean(axis=1), temp[:m].reshape(-1, n10).mean(axis=1)
     return {"Axis": axis, "corr(10 s means, temp_c)": np.corrcoef(*means)[0, 1],
+            "slow-driver test p": finding.p_value,
+            "forms chosen": ", ".join(name for name, _ in forms) or "none",
             "One-step MSE change": warm["mse"] / base["mse"] - 1,
             "30 s bias RMS change": warm["bias_rms"]["30"] / base["bias_rms"]["30"] - 1,
-            "30 s outage position change": warm["outage_position_error_m"]
-            / base["outage_position_error_m"] - 1}
+            "30 s outage position change": warm["outage_position_error_m"]["30"]
+            / base["outage_position_error_m"]["30"] - 1}
 
 
 def band_ratio(res: LoopResult, rate: float, lo: float, hi: float) -> tuple[float, float]:
@@ -371,15 +396,16 @@ def named_effects(loops: dict, recs, temp: pd.DataFrame) -> list[str]:
     lines = []
     ay = temp.set_index("Axis").loc["ay_g"]
     loop_ay = loops[(SUNSIDED_NAME, "ay_g")]
-    took = any(s.effect.channel == "temp_c" for s in loop_ay.steps)
+    took = any(getattr(s.effect, "channel", None) == "temp_c" for s in loop_ay.steps)
     lines.append(
         f"- **MPU-6050 die temperature.** The 10 s means of ay correlate with temp_c at "
-        f"r = {ay['corr(10 s means, temp_c)']:.2f}. Adding temp_c (lags 0-2 and its square) to "
-        f"the starting model changes the prediction-segment one-step MSE by "
-        f"{100 * ay['One-step MSE change']:+.2f} % and the 30 s bias RMS by "
+        f"r = {ay['corr(10 s means, temp_c)']:.2f}; the slow-driver test gives p = "
+        f"{ay['slow-driver test p']:.2g} (forms: {ay['forms chosen']}). With them as a "
+        f"compensation the starting model's prediction-segment one-step MSE changes by "
+        f"{100 * ay['One-step MSE change']:+.2f} % and its 30 s bias RMS by "
         f"{100 * ay['30 s bias RMS change']:+.1f} %. The loop itself "
         + ("keeps temp_c on ay." if took else "does not keep temp_c on ay: "
-           + _rejection(loop_ay, "aux temp_c")))
+           + _rejection(loop_ay, "driver temp_c")))
     for axis in ("ax_g", "ay_g", "az_g"):
         res = loops[("ADIS16405 imu1", axis)]
         ratio, peak = band_ratio(res, 100.0, 0.5, 0.62)
@@ -415,10 +441,10 @@ def named_effects(loops: dict, recs, temp: pd.DataFrame) -> list[str]:
 
 
 def _rejection(res: LoopResult, prefix: str) -> str:
-    rej = [r for r in res.rejected if r["effect"].startswith(prefix)]
+    rej = [r for r in res.rejected if r.effect.describe().startswith(prefix)]
     if rej:
         return ("it was tried and rejected on the evaluation segment: "
-                f"{evaluation_text(rej[0]['evaluation'])}.")
+                f"{evaluation_text(rej[0].judgement)}.")
     return "no diagnostic pointed to it (none of its tests fired)."
 
 
@@ -431,19 +457,25 @@ def _ratio_line(frame: pd.DataFrame, col: str, text: str) -> str:
             f"{int((v < 1).sum())} of {len(v)} axes.")
 
 
-def loop_lines(loops: pd.DataFrame) -> list[str]:
-    """The loop's prediction-segment ratios over every axis, and where any got worse."""
-    cols = ("30 s outage position after / before", "30 s bias RMS after / before")
-    worst = loops[list(cols)].max(axis=1)
-    worse = loops[worst > 1.02]
+def loop_lines(loops: pd.DataFrame, results: dict) -> list[str]:
+    """The loop's prediction-segment ratios over every axis, where any got worse (its
+    interval above 1), and the companions taken as inputs (none unless asked)."""
+    values = pd.DataFrame({column: [float(str(v).split()[0]) if v != "-" else np.nan
+                                    for v in loops[column]] for _, column in RATIOS})
+    worse = loops[loops["Worse (interval above 1)"] != "none"]
+    inputs = loops[loops["Companions as inputs"] != "none"]
+    kept = sum(bool(res.steps) for res in results.values())
     return [
-        _ratio_line(loops, "One-step MSE after / before", "One-step MSE after / before"),
-        _ratio_line(loops, cols[0], "30 s outage position error after / before"),
-        _ratio_line(loops, cols[1], "30 s bias RMS after / before"),
-        f"- Axes where the 30 s outage position error or the 30 s bias RMS ends more than 2 % "
-        f"worse: {len(worse)} of {len(loops)}"
-        + (": " + ", ".join(f"{r['Record']} {r['Axis']} ({max(r[cols[0]], r[cols[1]]):.3g})"
-                           for _, r in worse.iterrows()) if len(worse) else "") + "."]
+        *(_ratio_line(values.dropna(subset=[column]), column, column) for _, column in RATIOS
+          if values[column].notna().any()),
+        f"- Axes where an effect was kept: {kept} of {len(loops)}.",
+        f"- Axes where a number ends worse beyond its 95 % interval: {len(worse)} of "
+        f"{len(loops)}" + (": " + "; ".join(f"{r['Record']} {r['Axis']} "
+                                            f"({r['Worse (interval above 1)']})"
+                                            for _, r in worse.iterrows()) if len(worse) else "")
+        + ".",
+        f"- Written models with a companion (another axis of the same kind) as an input: "
+        f"{len(inputs)} of {len(loops)}."]
 
 
 def summary_lines(studies: pd.DataFrame) -> list[str]:
@@ -504,7 +536,7 @@ def main() -> None:
         markdown_table(example, digits=3), "",
         f"![ADIS16405 imu1 ay_g, fair protocol]({figure})",
         "", f"**Residual loop** (every axis; reports in `{rel}/loop/`), prediction segment:", "",
-        *loop_lines(loops), "",
+        *loop_lines(loops, loop_results), "",
         markdown_table(loops, digits=3), "",
         "**The effects the issue points to**, checked:", "",
         *named_effects(loop_results, recs, temp), "",

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.signal import lfilter
 
 from fosmodel.core.candidates import Term
 
@@ -264,3 +265,65 @@ def measured_runs() -> Callable[..., list[tuple[int, float, str]]]:
         return [(code, peak, err) for (code, peak), err in zip(results, errors)]
 
     return run
+def _loop_truth(truth: dict) -> list[tuple]:
+    """The undeclared effects of a data_synth record as the residual loop names them.
+
+    ``(effect, slow)`` per source: a temperature bias is a driver's slow part with its true
+    forms and weights (its powers about the reference temperature), another channel's
+    input a driver's fast part, and the rest as ``data_synth.true_effects`` maps them.
+    """
+    from data_synth.true_effects import true_effects
+    from fosmodel.core.derived import power_name
+    from fosmodel.loop.effects import make
+
+    out = []
+    temperature = {s["params"]["input"]: s["params"] for s in truth["sources"]
+                   if s["kind"] == "temperature_bias" and not s["declared"]}
+    for effect, slow in true_effects(truth):
+        if effect.kind == "driver" and effect.channel in temperature:
+            p = temperature[effect.channel]
+            forms = [[power_name(effect.channel, k, p["t_ref_c"]), c]
+                     for k, c in enumerate(p["coefs"]) if k and c]
+            effect = make("driver", channel=effect.channel, part="slow", forms=forms)
+        out.append((effect, slow))
+    return out
+
+
+@pytest.fixture
+def loop_truth() -> Callable[[dict], list[tuple]]:
+    """``loop_truth(truth)``: a data_synth record's undeclared effects as loop effects."""
+    return _loop_truth
+
+
+def _sweep_record(seed: int, hours: float = 6.0, rate: float = 1.0, gain: float = 0.02,
+                  square: float = 0.0, lag_s: float | None = None, walk: float = 0.0,
+                  still_until: float = 0.0, noise: float = 0.02,
+                  lsb: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """A gyro axis at ``rate`` Hz whose bias follows a swept temperature, and the temperature.
+
+    The temperature climbs from 5 to 20 degC in steps with flat stretches (held still over
+    the first ``still_until`` of the record); the bias is ``gain (T' - 10) + square
+    (T' - 10)^2`` with ``T'`` the temperature through a first-order lag of ``lag_s``, plus a
+    random walk (``walk`` per sqrt(s)), AR(1) noise and a quantisation step ``lsb``.
+    """
+    from fosmodel.core.derived import first_order_lag
+
+    rng = np.random.default_rng(seed)
+    n = round(hours * 3600 * rate)
+    t = np.arange(n) / n
+    ramp = np.clip((t - still_until) / (1 - still_until), 0, 1)
+    temp = 5 + 15 * (np.floor(ramp * 12) / 12 + 0.5 * np.clip(ramp * 12 % 1 * 2 - 1, 0, 1) / 12)
+    temp = np.round(temp + 0.05 * rng.standard_normal(n), 2)
+    lagged = temp if lag_s is None else first_order_lag(temp, lag_s, rate)
+    bias = gain * (lagged - 10) + square * (lagged - 10) ** 2
+    y = (bias + np.cumsum(rng.standard_normal(n)) * walk / np.sqrt(rate)
+         + lfilter([1.0], [1.0, -0.5], rng.standard_normal(n)) * noise)
+    if lsb:
+        y = np.round(y / lsb) * lsb
+    return y, temp
+
+
+@pytest.fixture
+def sweep_record() -> Callable[..., tuple[np.ndarray, np.ndarray]]:
+    """``sweep_record(seed, **options)``: a temperature sweep and the gyro bias it drives."""
+    return _sweep_record

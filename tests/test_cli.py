@@ -11,7 +11,6 @@ import pytest
 from scipy.signal import lfilter
 
 from fosmodel import FOSModel, cli
-from fosmodel.core.levels import level_series, level_tau
 
 
 @pytest.fixture
@@ -220,31 +219,54 @@ def test_close_loop_finds_an_undeclared_temperature_effect(tmp_path, capsys):
                               "--units", "deg/s", "--out", out, "--json", js, "--model", model],
                              capsys)
     assert code == 0, err
-    assert "aux temp_c" in stdout and "written to" in stdout
+    assert "driver temp_c, slow part" in stdout and "written to" in stdout
     # a progress line for the starting model, each round and each effect tried
     assert "fosmodel: starting model: " in err and "fosmodel: round 1: " in err
-    assert "fosmodel:   [1/" in err and "fosmodel: kept aux temp_c" in err
+    assert "fosmodel:   [1/" in err and "fosmodel: kept driver temp_c, slow part" in err
     data = json.loads(js.read_text())
-    aux = [e for e in data["effects"] if e["kind"] == "aux"]
-    assert [e["channel"] for e in aux] == ["temp_c"] and not data["worse_on_prediction"]
-    assert data["after"]["outage_mse"] < data["before"]["outage_mse"]
-    for name in ("report.md", "effects.csv", "diagnostics.md", "residual.png", "residual.svg"):
+    drivers = [e for e in data["effects"] if e["kind"] == "driver"]
+    assert [e["channel"] for e in drivers] == ["temp_c"] and not data["worse_on_prediction"]
+    assert data["after"]["outage_mse"]["30"] < data["before"]["outage_mse"]["30"]
+    for name in ("report.md", "effects.csv", "ratios.csv", "diagnostics.md", "residual.png",
+                 "residual.svg"):
         assert (out / name).exists()
-    # the final model is a model file: predict rebuilds its derived columns from the record
+    # the final model is a model file: predict rebuilds its compensation from the record
     saved = json.loads(model.read_text())
-    assert saved["format"] == "fosmodel.FOSModel" and "sq(temp_c)" in saved["params"]["columns"]
+    assert saved["format"] == "fosmodel.FOSModel"
+    assert all(name.startswith("pow(temp_c,") for name in saved["params"]["compensation"])
     pred = tmp_path / "pred.csv"
     code, stdout, err = _run(["predict", rec, "--model", model, "--out", pred], capsys)
     assert code == 0, err
     frame = pd.read_csv(pred)
     fitted = FOSModel.from_dict(saved)
     y, temp = frame["gyro_x"].to_numpy(), pd.read_csv(rec)["temp_c"].to_numpy()
-    train = slice(0, round(0.5 * len(y)))
-    exog = {"temp_c": temp, "sq(temp_c)": (temp - temp[train].mean()) ** 2}
-    for name in fitted.spec_.level_names:
-        exog[name] = level_series(y, level_tau(name), 100.0)
-    np.testing.assert_allclose(frame["prediction"], fitted.predict(y, exog), rtol=1e-9,
-                               atol=1e-9)
+    np.testing.assert_allclose(frame["prediction"], fitted.predict(y, {"temp_c": temp}),
+                               rtol=1e-9, atol=1e-9)
+
+
+def test_close_loop_takes_a_companion_as_an_input_only_when_asked(tmp_path, capsys):
+    rng = np.random.default_rng(3)
+    n, rate = 30_000, 100.0
+    gy = rng.standard_normal(n)
+    gx = 0.05 * rng.standard_normal(n) + 0.02 * np.r_[0.0, gy[:-1]]
+    rec = tmp_path / "imu.csv"
+    pd.DataFrame({"time": np.arange(n) / rate, "gx_dps": gx, "gy_dps": gy}).to_csv(rec,
+                                                                                  index=False)
+    runs = {}
+    for name, extra in (("default", []), ("asked", ["--aux", "gy_dps"])):
+        js = tmp_path / f"{name}.json"
+        code, stdout, err = _run(["close-loop", rec, "--column", "gx_dps", "--units", "deg/s",
+                                  "--out", tmp_path / name, "--json", js, *extra], capsys)
+        assert code == 0, err
+        runs[name] = json.loads(js.read_text())
+    default, asked = runs["default"], runs["asked"]
+    assert default["effects"] == [] and default["roles"]["companions"] == ["gy_dps"]
+    (noise,) = default["cross_axis"]
+    assert noise["channel"] == "gy_dps" and noise["lag"] == 1 and noise["fired"]
+    assert [(e["kind"], e["channel"]) for e in asked["effects"]] == [("companion", "gy_dps")]
+    report = (tmp_path / "asked" / "report.md").read_text()
+    assert "companion gy_dps as an input, as asked" in report
+    assert "taken as an input as asked" in report
 
 
 def test_fit_offers_levels(long_record, tmp_path, capsys):
@@ -268,8 +290,13 @@ def test_fit_offers_levels(long_record, tmp_path, capsys):
                              "tell its units; give them as gyro_y=UNITS (e.g. gyro_y=deg/s)\n"),
      (["--split", "25s,5s"], "fosmodel: error: the split 25s,5s leaves nothing of the record "
                              "(3000 samples, 30 s at 100 Hz) to predict\n"),
-     (["--aux", "temp"], "no column 'temp' (did you mean 'temp_c'?)"),
-     (["--max-lag", "0"], "max_lag must be an integer >= 1")],
+     (["--aux", "temp"], "--aux: no channel 'temp' among the other columns (did you mean "
+                         "'temp_c'?)"),
+     (["--aux", "temp_c"], "--aux: 'temp_c' is not a companion of the modelled axis "
+                           "(companions: none); a driver is offered as an input "
+                           "already"),
+     (["--horizons", "30s,30s"], "--horizons repeats a duration: (30.0, 30.0)"),
+     (["--max-lag", "0"], "--max-lag must be an integer >= 1, got 0")],
 )
 def test_close_loop_bad_input_exit_2(record, tmp_path, capsys, extra, message):
     args = ["close-loop", record, "--column", "gyro_y", "--out", tmp_path / "o", *extra]
@@ -515,7 +542,7 @@ def test_multi_valued_options_take_comma_lists():
     # --aux no longer swallows the record named after it
     args = parser.parse_args(["close-loop", "--aux", "temp_c,hum", "r.csv", "--column", "g",
                               "--out", "o"])
-    assert args.aux == ["temp_c", "hum"] and args.file == "r.csv"
+    assert args.aux == ["temp_c", "hum"] and args.files == ["r.csv"]
     args = parser.parse_args(["study", "r.csv", "--columns", "gx,gy", "--orders", "1-3,8",
                               "--degrees", "1", "--methods", "fos,burg", "--out", "o"])
     assert (args.columns, args.orders, args.methods) == (["gx", "gy"], [1, 2, 3, 8],

@@ -1,15 +1,22 @@
-"""The residual loop on data_synth records whose effect nobody declared: it must find it."""
+"""The residual loop on data_synth records whose effect nobody declared."""
 
 import numpy as np
 import pytest
 from scipy.signal import lfilter
 
 from data_synth import make_scenario
-from data_synth.true_effects import true_effects
 from fosmodel.core.exceptions import InputError
-from fosmodel.loop.closeloop import LoopConfig, close_loop, score_family
-from fosmodel.loop.effects import CandidateFamily
-from fosmodel.loop.judge import MIN_HALF_WINDOWS, compare, forecasts, outage_windows
+from fosmodel.loop.closeloop import (
+    LoopConfig,
+    close_loop,
+    judge_plan,
+    loop_split,
+    score_family,
+)
+from fosmodel.loop.effects import CandidateFamily, make
+from fosmodel.loop.fitting import Fitter, Judge
+from fosmodel.loop.judge import MIN_HALF_WINDOWS, compare, forecasts, windows
+from fosmodel.loop.record import LoopRecord
 
 
 def _run(name, seed, **kw):
@@ -21,9 +28,9 @@ def _run(name, seed, **kw):
 
 
 def _found(res, true):
-    """The kept step that is the true effect (kind, and channel for an input), or None."""
+    """The kept step that is the true effect (kind, and channel for a driver), or None."""
     return next((s for s in res.steps if s.effect.kind == true.kind
-                 and (true.kind != "aux" or s.effect.channel == true.channel)), None)
+                 and (true.kind != "driver" or s.effect.channel == true.channel)), None)
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -31,23 +38,26 @@ def _found(res, true):
     "undeclared_temperature", "undeclared_vibration", "undeclared_nonlinear",
     "undeclared_drift", "undeclared_aux_lag", "undeclared_step"])
 @pytest.mark.slow
-def test_loop_finds_the_effect_and_recovers_half_of_what_the_truth_gives(name, seed):
+def test_loop_finds_the_effect_and_recovers_half_of_what_the_truth_gives(name, seed,
+                                                                          loop_truth):
     rec, y, channels, config, res = _run(name, seed)
-    ((true, slow),) = true_effects(rec.truth)
+    ((true, slow),) = loop_truth(rec.truth)
     step = _found(res, true)
     assert step is not None, [s.effect.describe() for s in res.steps]
     # besides the effect, at most the local level (a slow error's stochastic form)
     assert {s.effect.kind for s in res.steps} <= {true.kind, "level"}
     if name == "undeclared_aux_lag":
-        assert step.lag == 3
+        assert step.lag == 3 and step.effect.part == "fast"
+    if name == "undeclared_temperature":
+        assert step.effect.part == "slow"
     if true.kind == "periodic":
         assert abs(step.effect.freq_hz - true.freq_hz) < 0.05
-    metric = "outage_mse" if slow else "mse"
-    family = CandidateFamily(config.max_lag).add(true, channels, len(y), rec.rate,
-                                                 res.segments.train)
+    record = LoopRecord.single(y, channels, rec.rate)
+    family = CandidateFamily(config.max_lag).add(true, record)
     truth = score_family(y, channels, config, family)
-    before, after = res.before[metric], res.after[metric]
-    assert before - after >= 0.5 * (before - truth[metric]) > 0
+    metric = (lambda m: m["outage_mse"]["30"]) if slow else (lambda m: m["mse"])
+    before, after = metric(res.before), metric(res.after)
+    assert before - after >= 0.5 * (before - metric(truth)) > 0
 
 
 @pytest.mark.parametrize("name", ["clean", "unrelated_temperature"])
@@ -57,14 +67,14 @@ def test_controls_add_nothing_and_never_worsen(name):
     for seed in range(20):
         _, _, _, _, res = _run(name, seed)
         added += bool(res.steps)
-        assert res.after["mse"] <= 1.01 * res.before["mse"]
+        assert not res.worse()
     assert added <= 1
 
 
 def test_two_effects_at_once_are_both_found():
     _, _, _, _, res = _run("temperature_and_vibration", 0)
-    found = {(s.effect.kind, s.effect.channel) for s in res.steps}
-    assert ("aux", "temp_c") in found and any(k == "periodic" for k, _ in found)
+    found = {(s.effect.kind, getattr(s.effect, "channel", None)) for s in res.steps}
+    assert ("driver", "temp_c") in found and any(k == "periodic" for k, _ in found)
     freq = next(s.effect.freq_hz for s in res.steps if s.effect.kind == "periodic")
     assert abs(freq - 7.3137) < 0.05
 
@@ -88,17 +98,17 @@ def test_a_level_is_rejected_where_there_is_no_slow_error():
     y = lfilter([1.0], [1.0, -0.6, 0.1], rng.standard_normal(60_000)) * 0.3
     config = LoopConfig(rate=100.0, level_taus=(0.5, 2.0, 8.0))
     # the slow tests are what offer a level: force the offer by judging it directly
-    from fosmodel.loop.closeloop import _Fitter, _Judge, loop_split
-    from fosmodel.loop.effects import Effect
-
     segments = loop_split(len(y), config)
-    fitter = _Fitter(y, {}, segments, config)
+    record = LoopRecord.single(y, {}, config.rate)
+    fitter = Fitter(record, segments.train, config)
     family = CandidateFamily(config.max_lag)
     current = fitter.fit(family)
-    effect = Effect("level", taus=config.level_taus)
-    trial = fitter.fit(family.add(effect, {}, len(y), 100.0, segments.train))
-    verdict = _Judge(fitter, current, y, segments, config)(trial, effect)
-    assert not verdict["accepted"]
+    effect = make("level", taus=config.level_taus)
+    trial_family = family.add(effect, record)
+    judged = judge_plan(segments.evaluate, config)
+    judgement = Judge(fitter, current, family, judged)(fitter.fit(trial_family), trial_family,
+                                                       effect)
+    assert not judgement.accepted
     assert close_loop(y, {}, config).steps == []
 
 
@@ -109,7 +119,7 @@ def test_the_prediction_segment_never_decides():
     z[predict] += 5 * np.sin(np.arange(predict.stop - predict.start) * 0.37)  # a new effect
     other = close_loop(z, channels, config)
     assert [s.effect for s in other.steps] == [s.effect for s in res.steps]
-    assert [s.comparison for s in other.steps] == [s.comparison for s in res.steps]
+    assert [s.judgement for s in other.steps] == [s.judgement for s in res.steps]
 
 
 def test_json_has_the_documented_layout():
@@ -118,14 +128,23 @@ def test_json_has_the_documented_layout():
     keys = {"mse", "position_error_m", "outage_mse", "bias_rms", "outage_position_error_m",
             "terms"}
     assert keys <= set(data["before"]) and keys <= set(data["after"])
+    assert set(data["before"]["outage_position_error_m"]) == {"30"}  # 90 s: three windows
+    assert set(data["before"]["bias_rms"]) == {"30"}
     effect = data["effects"][0]
-    assert {"kind", "channel", "lag", "freq_hz", "tau_s", "evidence", "mse_before",
+    assert {"kind", "channel", "part", "lag", "evidence", "evaluation", "mse_before",
             "mse_after"} <= set(effect)
-    assert effect["kind"] == "aux" and effect["channel"] == "accel_x" and effect["lag"] == 3
-    assert effect["freq_hz"] is None and effect["mse_after"] < effect["mse_before"]
-    evaluation = effect["evidence"]["evaluation"]
-    assert len(evaluation["origins_s"]) == 4 and evaluation["kept_on"] in ("one_step", "outage")
-    assert {"worse_on_prediction", "level_taus_offered", "rejected"} <= set(data)
+    assert effect["kind"] == "driver" and effect["channel"] == "accel_x" and effect["lag"] == 3
+    assert effect["part"] == "fast" and effect["mse_after"] < effect["mse_before"]
+    evaluation = effect["evaluation"]
+    assert len(evaluation["origins_s"]) == 4
+    assert evaluation["kept_on"] in evaluation["comparisons"]
+    assert set(evaluation["comparisons"]) == {"one_step", "outage_5s"}
+    assert {"worse_on_prediction", "ratios", "level_taus_offered", "rejected", "roles",
+            "horizons_s", "cross_axis", "notes"} <= set(data)
+    assert data["horizons_s"]["judged"] == [5.0] and data["horizons_s"]["reported"] == [30.0]
+    assert data["ratios"]["mse"]["verdict"] in ("better", "undetermined")
+    assert data["horizons_s"]["skipped"]["300"] == (
+        "the prediction segment (90 s) holds 0 300 s windows, fewer than 2")
 
 
 class _LastPlus:
@@ -143,9 +162,9 @@ class _LastPlus:
 
 def _compare(a, b, y, segment, config):
     horizon = round(config.eval_horizon_s * config.rate)
-    starts = outage_windows(segment, horizon)
-    return compare(forecasts(a, y, segment, starts, horizon),
-                   forecasts(b, y, segment, starts, horizon), config.accept_alpha)
+    where = {config.eval_horizon_s: (windows(segment, horizon, 100), horizon)}
+    one_step, *_ = compare(forecasts(a, y, segment, where), forecasts(b, y, segment, where))
+    return one_step
 
 
 def test_a_change_that_helps_only_in_the_first_half_of_the_evaluation_does_not_pass():
@@ -154,20 +173,20 @@ def test_a_change_that_helps_only_in_the_first_half_of_the_evaluation_does_not_p
     jump = rng.standard_normal(n)
     y = np.cumsum(jump) + rng.standard_normal(n)
     config = LoopConfig(rate=10.0)
+    alpha = config.accept_alpha
     base = _LastPlus(np.zeros(n))
     share = np.where(np.arange(n) < 4000, 1.0, -0.2)  # knows the jumps, then errs the other way
     fading = _compare(base, _LastPlus(share * jump), y, segment, config)
     # significant over the whole segment, and lower errors there
-    assert fading["one_step_p"] < config.accept_alpha / 2 and fading["one_step_gain"] > 0.05
-    first, second = fading["one_step_gain_halves"]
-    assert fading["halves_judged"] and first > 0 > second
-    assert "one_step" in fading["passes_whole"] and "one_step" not in fading["passes"]
+    assert fading.p < alpha / 2 and fading.gain > 0.05
+    first, second = fading.halves
+    assert first > 0 > second
+    assert fading.passes(alpha, halves=False) and not fading.passes(alpha)
     steady = _compare(base, _LastPlus(0.4 * jump), y, segment, config)
-    assert min(steady["one_step_gain_halves"]) > 0 and "one_step" in steady["passes"]
+    assert min(steady.halves) > 0 and steady.passes(alpha)
     # too few outage windows to judge halves: the whole segment decides
     short = _compare(base, _LastPlus(share * jump), y, slice(3500, 4500), config)
-    assert 2 * MIN_HALF_WINDOWS > 20 and not short["halves_judged"]
-    assert short["one_step_gain_halves"][1] < 0 and "one_step" in short["passes"]
+    assert 2 * MIN_HALF_WINDOWS > 20 and short.halves is None and short.passes(alpha)
 
 
 def test_too_short_a_record_is_refused():
@@ -182,26 +201,27 @@ def test_a_rejected_candidate_keeps_no_columns_into_the_next_diagnosis(monkeypat
     import gc
     import weakref
 
-    from fosmodel.loop import closeloop
+    from fosmodel.loop import findings
 
     made: list = []
     checked: list[int] = []
-    add, diagnose = CandidateFamily.add, closeloop._Diagnostics.__call__
+    add, diagnose = CandidateFamily.add, findings.Diagnostics.__call__
 
     def recording_add(self, effect, *args, **kwargs):
         family = add(self, effect, *args, **kwargs)
-        made.extend(weakref.ref(v) for k, v in family.columns.items() if k not in self.columns)
+        made.extend(weakref.ref(v) for k, v in family.arrays().items()
+                    if k not in self.arrays())
         return family
 
-    def checking_diagnose(self, model):
+    def checking_diagnose(self, model, family):
         gc.collect()
         alive = [ref() for ref in made if ref() is not None]
         assert all(any(a is v for v in model.inputs.values()) for a in alive)
         checked.append(len(made))
-        return diagnose(self, model)
+        return diagnose(self, model, family)
 
     monkeypatch.setattr(CandidateFamily, "add", recording_add)
-    monkeypatch.setattr(closeloop._Diagnostics, "__call__", checking_diagnose)
+    monkeypatch.setattr(findings.Diagnostics, "__call__", checking_diagnose)
     res = _run("slow_steps", 0)[-1]
     assert len(checked) >= 2 and checked[-1] > 0  # a diagnosis after columns were tried
-    assert any(r["kind"] in ("drift", "step") for r in res.rejected)
+    assert any(r.effect.kind in ("drift", "step") for r in res.rejected)

@@ -31,8 +31,9 @@ def test_each_name_rebuilds_its_column():
     np.testing.assert_array_equal(derive(step_name(12.34), N, RATE, {}, {}),
                                   (T >= 12.34).astype(float))
     np.testing.assert_allclose(derive("sq(temp)", N, RATE, channels, offsets), (temp - 25) ** 2)
+    start = temp[: round(20 * RATE)].mean()  # the level starts at the first 20 s's mean
     np.testing.assert_allclose(derive(fast_name("temp", 20), N, RATE, channels, {}),
-                               temp - level_series(temp, 20.0, RATE))
+                               temp - level_series(np.r_[start, temp], 20.0, RATE)[1:])
 
 
 def test_names_keep_enough_digits_and_say_what_they_read():

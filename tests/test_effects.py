@@ -1,93 +1,218 @@
+"""The effect catalogue: each kind through the registry, its candidates, JSON and offers."""
+
+from dataclasses import dataclass
+
 import numpy as np
 import pytest
 
+from fosmodel.core.candidates import CandidateSpec
+from fosmodel.core.derived import cosine_name, lowpass_name, power_name, sine_name
 from fosmodel.core.levels import level_series
+from fosmodel.loop.config import LoopConfig
 from fosmodel.loop.diagnose import Finding
-from fosmodel.loop.effects import CandidateFamily, Effect, effects_from
+from fosmodel.loop.effects import (
+    CandidateFamily,
+    Effect,
+    Offer,
+    effect_class,
+    effect_from_dict,
+    effects_from,
+    kinds,
+    make,
+    register,
+    unregister,
+)
+from fosmodel.loop.record import LoopRecord
+from fosmodel.loop.roles import channel_roles
 
 RATE = 10.0
-N = 200
+N = 2000
 TIME = np.arange(N) / RATE
-TRAIN = slice(0, 100)
+TEMP = np.linspace(20, 30, N)
+RECORD = LoopRecord.single(np.sin(TIME), {"temp_c": TEMP, "Accel X (g)": np.cos(TIME),
+                                          "gz_dps": np.cos(2 * TIME)}, RATE)
+
+
+def test_every_kind_is_registered_in_rank_order():
+    assert kinds() == ("level", "driver", "companion", "periodic", "nonlinear", "drift", "step")
+    assert all(effect_class(k).kind == k for k in kinds())
+    with pytest.raises(ValueError, match="unknown effect kind 'magic'; known: level, driver"):
+        make("magic")
 
 
 def test_each_kind_adds_its_candidates():
-    temp = np.linspace(20, 30, N)
     fam = CandidateFamily(5)
-    aux = fam.add(Effect("aux", channel="temp", max_lag=3), {"temp": temp}, N, RATE, TRAIN)
-    assert aux.exog_lags == {"temp": 3} and aux.inputs["temp"] is temp
-    np.testing.assert_allclose(aux.columns["sq(temp)"], (temp - temp[:100].mean()) ** 2)
-    fast = fam.add(Effect("aux", channel="temp", max_lag=2, form="fast", tau_s=20.0),
-                   {"temp": temp}, N, RATE, TRAIN)
-    assert fast.exog_lags == {"temp_fast20s": 2} and not fast.columns
-    np.testing.assert_allclose(fast.inputs["temp_fast20s"], temp - level_series(temp, 20, RATE))
-    per = fam.add(Effect("periodic", freq_hz=1.25), {}, N, RATE, TRAIN)
+    lag = power_name("temp_c", 1, 25.0, tau_s=60)
+    slow = fam.add(make("driver", channel="temp_c", part="slow", forms=[[lag, 0.02]],
+                        level_taus=[2.0, 8.0], block=10, level_blocks=6.0), RECORD)
+    assert slow.compensation == {lag: 0.02} and slow.levels == (2.0, 8.0)
+    assert slow.comp_fit == (10, 1 / 6.0) and not slow.exog_lags
+    np.testing.assert_allclose(slow.compensation_series(),
+                               0.02 * (RECORD.derive(lowpass_name("temp_c", 60)) - 25.0))
+    fast = fam.add(make("driver", channel="Accel X (g)", part="fast", max_lag=2, tau_s=20.0),
+                   RECORD)
+    token = "u__Accel_20_X_20__28_g_29__fast20s"
+    assert fast.exog_lags == {token: 2} and not fast.columns
+    x = RECORD.channels["Accel X (g)"]
+    start = x[:200].mean()  # the fast part's level starts at the mean of its first 20 s
+    np.testing.assert_allclose(fast.inputs[token], x - level_series(np.r_[start, x], 20, RATE)[1:])
+    companion = fam.add(make("companion", channel="gz_dps", max_lag=3, tau_s=20.0), RECORD)
+    assert companion.exog_lags == {"gz_dps_fast20s": 3}
+    per = fam.add(make("periodic", freq_hz=1.25), RECORD)
     np.testing.assert_allclose(per.columns["cos@1.25Hz"], np.cos(2 * np.pi * 1.25 * TIME))
     np.testing.assert_allclose(per.columns["sin@1.25Hz"], np.sin(2 * np.pi * 1.25 * TIME))
-    nonlinear = fam.add(Effect("nonlinear", max_lag=4), {}, N, RATE, TRAIN)
+    nonlinear = fam.add(make("nonlinear", max_lag=4), RECORD)
     assert nonlinear.degree == 2 and nonlinear.product_lags == 4
-    level = fam.add(Effect("level", taus=(2.0, 8.0)), {}, N, RATE, TRAIN)
+    level = fam.add(make("level", taus=(2.0, 8.0)), RECORD)
     assert level.levels == (2.0, 8.0) and not level.columns
-    drift = fam.add(Effect("drift", form="linear", tau_s=4.0), {}, N, RATE, TRAIN)
+    drift = fam.add(make("drift", form="linear", tau_s=4.0), RECORD)
     np.testing.assert_allclose(drift.columns["t@s"], TIME)
     np.testing.assert_allclose(drift.columns["exp(-t/4s)"], np.exp(-TIME / 4.0))
-    step = fam.add(Effect("step", time_s=7.5), {}, N, RATE, TRAIN)
+    step = fam.add(make("step", time_s=7.5), RECORD)
     np.testing.assert_array_equal(step.columns["step@7.5s"], (TIME >= 7.5).astype(float))
     assert fam.columns == {} and fam.degree == 1  # the family itself is unchanged
+    spec = CandidateSpec(2, 1, {**fast.exog_lags, **companion.exog_lags},
+                         [*per.columns, *drift.columns, *step.columns], levels=level.levels)
+    assert len(spec.exog_lags) == 2  # raises if a name were not a valid candidate name
 
 
-def test_candidate_names_are_valid_fos_column_names():
-    from fosmodel.core.candidates import CandidateSpec
+@pytest.mark.parametrize("effect", [
+    make("level", taus=(1.5, 30.0)),
+    make("driver", channel="temp_c", part="slow", forms=[["pow(temp_c,2,25)", 0.001]],
+         level_taus=[3.0], block=20, level_blocks=None),
+    make("driver", channel="ay", part="fast", max_lag=10, tau_s=20.0),
+    make("companion", channel="gz_dps", max_lag=10, tau_s=20.0),
+    make("periodic", freq_hz=7.31374), make("nonlinear", max_lag=4),
+    make("drift", form="exponential", tau_s=62.33), make("step", time_s=104.9)])
+def test_each_kind_round_trips_through_its_json(effect):
+    import json
 
-    fam = CandidateFamily(2)
-    for e in (Effect("aux", channel="temp_c", max_lag=1),
-              Effect("aux", channel="temp_c", max_lag=1, form="fast", tau_s=20.0),
-              Effect("periodic", freq_hz=7.3137), Effect("level", taus=(1.0, 3.5)),
-              Effect("drift", form="exponential", tau_s=62.33), Effect("step", time_s=104.9)):
-        fam = fam.add(e, {"temp_c": TIME}, N, RATE, TRAIN)
-    CandidateSpec(2, 1, fam.exog_lags, list(fam.columns), levels=fam.levels)  # raises if bad
+    back = effect_from_dict(json.loads(json.dumps(effect.to_dict())))
+    assert back == effect and back.describe() == effect.describe()
+    assert back.same_as(effect)
+
+
+def test_descriptions():
+    assert make("periodic", freq_hz=7.31374).describe() == "periodic 7.3137 Hz"
+    assert make("step", time_s=105.0).describe() == "step at 105 s"
+    assert make("level", taus=(1.5, 30.0)).describe() == "local level (tau 1.5-30 s)"
+    assert make("driver", channel="ay", part="fast", max_lag=10, tau_s=20.0).describe() == (
+        "driver ay, fast part (lags 0-10)")
+    forms = [[power_name("temp_c", 1, 25), 0.02], [power_name("temp_c", 2, 25), 0.001],
+             [power_name("temp_c", 1, 25, tau_s=600), 0.01]]
+    assert make("driver", channel="temp_c", part="slow", forms=forms,
+                level_taus=[5.0]).describe() == (
+        "driver temp_c, slow part (as read, powers 1, 2; lag 600 s, power 1) with the level")
+    assert make("companion", channel="gz_dps", max_lag=10).describe() == (
+        "companion gz_dps as an input, as asked (fast part, lags 0-10)")
+    assert make("nonlinear", max_lag=4).describe() == (
+        "nonlinear (cross-products of degree 2 of y[n-1]..y[n-4])")
+    # the synthetic records' truth still spells a channel input "aux": a driver's fast part
+    assert Effect("aux", channel="accel_x", max_lag=5).describe() == (
+        "driver accel_x, fast part (lags 0-5)")
 
 
 def _finding(test, fired, **evidence):
     return Finding(test, 1.0, 0.0 if fired else 1.0, 0.01, evidence)
 
 
-def test_findings_map_to_effects():
-    findings = [
-        _finding("whiteness", True), _finding("allan", True),
-        _finding("periodic", True, freq_hz=7.3), _finding("aux", True, channel="t", lag=4),
-        _finding("aux", False, channel="u", lag=0), _finding("nonlinear", True, max_lag=4),
-        _finding("trend", True, form="linear", tau_s=50.0), _finding("step", True, time_s=9.0)]
-    effects = effects_from(findings, aux_max_lag=2, level_taus=(1.0, 5.0), fast_tau_s=20.0)
-    assert [(e.kind, e.form) for e in effects] == [
-        ("level", None), ("periodic", None), ("aux", None), ("aux", "fast"),
-        ("nonlinear", None), ("drift", "linear"), ("step", None)]
-    level, _, aux, fast, nonlinear, _, step = effects
+def _offer(findings, aux=(), family=None):
+    config = LoopConfig(rate=RATE, sensor="gyro", units="deg/s", aux=aux)
+    roles = channel_roles(["temp_c", "ax_g", "gz_dps"], "gyro", aux=aux)
+    return Offer(findings, RECORD, (slice(0, 1000),), roles, config,
+                 family or CandidateFamily(5), (1.0, 5.0))
+
+
+FINDINGS = [
+    _finding("whiteness", True), _finding("allan", True),
+    _finding("periodic", True, freq_hz=7.3), _finding("aux", True, channel="ax_g", lag=4),
+    _finding("aux", True, channel="gz_dps", lag=1), _finding("aux", False, channel="temp_c",
+                                                             lag=0),
+    _finding("nonlinear", True, max_lag=4), _finding("trend", True, form="linear", tau_s=50.0),
+    _finding("step", True, time_s=9.0),
+    _finding("driver", True, channel="temp_c", forms=[["pow(temp_c,1,25)", 0.02]],
+             block_s=1.0, level_blocks=6.0, share=0.5)]
+
+
+def test_findings_offer_effects_by_role():
+    effects = effects_from(_offer(FINDINGS))
+    assert [(e.kind, getattr(e, "part", None)) for e in effects] == [
+        ("level", None), ("driver", "slow"), ("driver", "fast"), ("periodic", None),
+        ("nonlinear", None), ("drift", None), ("step", None)]
+    level, slow, fast, *_ = effects
     assert level.taus == (1.0, 5.0) and level.evidence["slow_tests"] == ["allan", "trend", "step"]
-    assert aux.channel == fast.channel == "t" and aux.max_lag == fast.max_lag == 4
-    assert fast.tau_s == 20.0 and nonlinear.max_lag == 4
-    assert effects[1].freq_hz == 7.3 and step.time_s == 9.0
-    # no slow test fired, or no grid: no level
-    assert all(e.kind != "level" for e in effects_from(findings[2:6], 2, (1.0,)))
-    assert all(e.kind != "level" for e in effects_from(findings, 2, ()))
+    assert slow.channel == "temp_c" and slow.forms == (("pow(temp_c,1,25)", 0.02),)
+    assert slow.level_taus and slow.block == 10 and slow.level_blocks == 6.0
+    assert fast.channel == "ax_g" and fast.max_lag == 10  # an accelerometer drives a gyro
+    # the companion gz_dps correlates, but is no input unless asked for
+    assert not any(getattr(e, "channel", None) == "gz_dps" for e in effects)
+    asked = effects_from(_offer(FINDINGS, aux=("gz_dps",)))
+    (companion,) = [e for e in asked if e.kind == "companion"]
+    assert companion.channel == "gz_dps" and companion.max_lag == 10
+    # no slow test fired and no level in the model: no level, and the driver comes alone
+    quiet = effects_from(_offer([f for f in FINDINGS if f.test not in ("allan", "trend",
+                                                                       "step")]))
+    assert "level" not in [e.kind for e in quiet]
+    assert next(e for e in quiet if e.kind == "driver").level_taus is None
 
 
 def test_slow_relations_and_sameness():
-    assert Effect("drift", tau_s=5.0).is_slow and Effect("step", time_s=1.0).is_slow
-    assert Effect("aux", channel="t").is_slow
-    assert not Effect("aux", channel="t", form="fast", tau_s=20.0).is_slow
-    assert not Effect("level", taus=(1.0,)).is_slow and not Effect("periodic").is_slow
-    assert not Effect("aux", channel="t").same_as(Effect("aux", channel="t", form="fast"))
-    assert Effect("level", taus=(1.0,)).same_as(Effect("level", taus=(2.0,)))
+    assert make("drift", tau_s=5.0).strict and make("step", time_s=1.0).strict
+    assert not make("level", taus=(1.0,)).strict
+    assert not make("driver", channel="t", part="slow").strict
+    assert make("driver", channel="t", part="fast", max_lag=1, tau_s=20.0).strict
+    assert not make("driver", channel="t", part="fast").same_as(make("driver", channel="t"))
+    assert make("level", taus=(1.0,)).same_as(make("level", taus=(2.0,)))
+    assert make("periodic", freq_hz=7.30).same_as(make("periodic", freq_hz=7.33))
+    assert make("drift").waits_for == ("level", "driver") == make("step").waits_for
+    assert not make("periodic").pooled and not make("step").pooled
+    assert make("driver", channel="t").pooled and make("drift").pooled
 
 
-def test_describe_and_bad_kind():
-    assert Effect("periodic", freq_hz=7.31374).describe() == "periodic 7.3137 Hz"
-    assert "step at 105 s" == Effect("step", time_s=105.0).describe()
-    assert Effect("level", taus=(1.5, 30.0)).describe() == "local level (tau 1.5-30 s)"
-    assert Effect("aux", channel="ay", max_lag=10, form="fast", tau_s=20.0).describe() == (
-        "aux ay, fast part (lags 0-10)")
-    assert Effect("nonlinear", max_lag=4).describe() == (
-        "nonlinear (cross-products of degree 2 of y[n-1]..y[n-4])")
-    with pytest.raises(ValueError):
-        Effect("magic")
+@dataclass(frozen=True)
+class _SlowLine(Effect):
+    """A toy kind: a line too slow for the periodic test, offered whenever the residual is
+    not white."""
+
+    kind = "toy_slow_line"
+    rank = 5
+    freq_hz: float = 0.02
+
+    @classmethod
+    def offered(cls, offer):
+        return [cls()] if offer.fired("whiteness") else []
+
+    def add_to(self, family, record):
+        return family.with_columns([cosine_name(self.freq_hz), sine_name(self.freq_hz)],
+                                   record)
+
+    def describe(self):
+        return f"toy line {self.freq_hz:g} Hz"
+
+
+@pytest.fixture
+def toy_kind():
+    register(_SlowLine)
+    yield _SlowLine
+    unregister(_SlowLine.kind)
+
+
+def test_a_new_kind_is_one_registered_class_and_runs_through_the_loop(toy_kind, tmp_path):
+    from scipy.signal import lfilter
+
+    from fosmodel.loop.closeloop import close_loop
+    from fosmodel.loop.loop_report import write_loop_report
+
+    assert "toy_slow_line" in kinds()
+    rng = np.random.default_rng(1)
+    n, rate = 30_000, 100.0
+    t = np.arange(n) / rate
+    y = (lfilter([1.0], [1.0, -0.5], rng.standard_normal(n)) * 0.1
+         + 0.2 * np.sin(2 * np.pi * 0.02 * t + 0.4))
+    res = close_loop(y, {}, LoopConfig(rate=rate))
+    assert res.steps[0].effect.kind == "toy_slow_line", [s.effect.describe() for s in res.steps]
+    assert {"cos@0.02Hz", "sin@0.02Hz"} & set(res.steps[0].terms_added)
+    assert res.to_json_dict()["effects"][0]["kind"] == "toy_slow_line"
+    assert "toy line 0.02 Hz" in (write_loop_report(res, tmp_path, "toy")[-1]).read_text()
+    with pytest.raises(ValueError, match="registered already"):
+        register(type("Other", (_SlowLine,), {"kind": "toy_slow_line"}))

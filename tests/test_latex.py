@@ -229,7 +229,7 @@ WRITERS = {"special": _special_table, "study": lambda out: _studies(out, (0,)),
            "allan": _allan, "imu": _imu, "workflow": _workflow, "summary": _summary}
 EXPECTED = {"special": {"special"}, "study": {"comparison", "study", "best", "level"},
             "studies": {"best", "comparison", "study", "level"},
-            "loop": {"effects", "diagnostics"}, "allan": {"allan", "noise"},
+            "loop": {"effects", "ratios", "diagnostics"}, "allan": {"allan", "noise"},
             "imu": {"noise", "noise_si", "allan"},
             "workflow": {"noise", "study", "loop", "timing"}, "summary": {"summary"}}
 

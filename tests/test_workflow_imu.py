@@ -51,6 +51,16 @@ def test_every_axis_goes_through_every_step(result, record):
             / study["baseline outage error (m, 30 s)"]).all()
 
 
+def test_each_axis_has_the_other_axes_of_its_kind_as_companions(result):
+    for a in result.axes:
+        kind = [x.axis.column for x in result.axes
+                if x.axis.sensor == a.axis.sensor and x is not a]
+        assert a.loop.roles.companions == tuple(kind) and a.loop.roles.told == "as given"
+        assert not any(s.effect.kind == "companion" for s in a.loop.steps)
+        assert [c["channel"] for c in a.loop.cross_axis] == kind
+    assert "cross-axis noise (largest)" in result.loop_table()
+
+
 @pytest.mark.slow
 def test_the_rows_are_the_steps_run_alone(result, record):
     """A row of the tables is what the study and the loop of that axis give by themselves."""
@@ -64,7 +74,7 @@ def test_the_rows_are_the_steps_run_alone(result, record):
                                   a.study.rows.drop(columns="runtime_s"))
     others = {k: v for k, v in record.columns.items() if k != a.axis.column}
     loop = close_loop(record.columns[a.axis.column], others,
-                      config.loop_config(record.rate, a.axis))
+                      config.loop_config(record.rate, a.axis, [x.axis for x in result.axes]))
     assert loop.after == a.loop.after and len(loop.steps) == len(a.loop.steps)
 
 

@@ -7,6 +7,7 @@ Each type reads one option's text into the value the library takes, and refuses 
 from __future__ import annotations
 
 import argparse
+import re
 
 import numpy as np
 
@@ -77,6 +78,21 @@ def int_list(text: str) -> list[int]:
             raise argparse.ArgumentTypeError(f"expected integers like 1-10 or 1,2,5, got {text!r}"
                                              ) from None
     return out
+
+
+_DURATION = re.compile(r"^([0-9]*\.?[0-9]+(?:e[+-]?[0-9]+)?)\s*(s|min|h)?$")
+_SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0}
+
+
+def durations(text: str) -> tuple[float, ...]:
+    """``30s,5min,1h`` -> durations in seconds (a bare number is in seconds)."""
+    out = []
+    for part in text.split(","):
+        m = _DURATION.match(part.strip())
+        if not m or float(m.group(1)) <= 0:
+            raise argparse.ArgumentTypeError(f"expected durations like 30s,5min,1h, got {text!r}")
+        out.append(float(m.group(1)) * _SECONDS[m.group(2) or "s"])
+    return tuple(out)
 
 
 def name_list(text: str) -> list[str]:

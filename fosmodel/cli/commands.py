@@ -16,8 +16,9 @@ import json
 import sys
 import textwrap
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ..core.exceptions import InputError
+from ..core.exceptions import InputError, OptionError
 from ..io.loader import Record, load_record, parse_scales
 from ..io.output import (
     atomic_write,
@@ -29,6 +30,9 @@ from ..io.output import (
 )
 from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
 from .flags import with_flags
+
+if TYPE_CHECKING:
+    from ..models.model import FOSModel
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
@@ -91,34 +95,73 @@ def fit(args: argparse.Namespace) -> int:
     from ..models.model import FOSModel
 
     out = writable_file(args.out)
-    refuse_overwrite({"--out": out}, {"the record": args.file})
+    refuse_overwrite({"--out": out}, {f"the record {i + 1}": f for i, f in enumerate(args.files)})
     exog_lags = dict(args.exog or [])
     if args.column in exog_lags:
         raise InputError(f"--exog {args.column}:{exog_lags[args.column]}: the modelled column "
                          "cannot be its own input (its lag 0 is the value predicted; its past "
                          "is in --max-lag)")
-    rec = _load(args, columns=[args.column, *exog_lags])
-    y = rec.column(args.column)
+    args.file = args.files[0]  # a single record's notes are not prefixed with its name
+    recs = [_load(args, path if len(args.files) > 1 else None, columns=[args.column, *exog_lags])
+            for path in args.files]
+    y = recs[0].column(args.column)
     levels = args.levels
     if levels == "auto":
-        levels = list(levels_for(y, rec.require_rate()))
+        levels = list(levels_for(y, recs[0].require_rate()))
         print("levels offered (below the Allan floor): "
               + ", ".join(f"{t:g} s" for t in levels))
     model = FOSModel(max_lag=args.max_lag, degree=args.degree, exog_lags=exog_lags,
-                     levels=levels, rate=rec.require_rate() if levels else None,
+                     levels=levels, rate=recs[0].require_rate() if levels else None,
                      max_terms=args.max_terms, stop=args.stop, tol=args.tol,
                      max_candidates=args.max_candidates)
     spec = model.candidate_spec()
     print(f"candidates: {count_candidates(spec)} (L={spec.max_lag}, CP={spec.degree}"
           + "".join(f", {k}:0-{v}" for k, v in exog_lags.items()) + ")")
-    exog = {name: rec.column(name) for name in exog_lags}
-    model.fit(pd.Series(y, name=args.column), exog, segments=rec.segments)
+    meta: dict = {"column": args.column, "rate_hz": recs[0].rate}
+    if len(recs) == 1:
+        rec = recs[0]
+        model.fit(pd.Series(y, name=args.column), {n: rec.column(n) for n in exog_lags},
+                  segments=rec.segments)
+        meta.update(source=rec.source, n_samples=rec.n_samples)
+    else:
+        model, constants = _fit_sessions(model, recs, args.column, exog_lags)
+        meta.update(_sessions_meta(recs, constants))
     print(model.summary())
-    meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
-            "n_samples": rec.n_samples}
     write_model(out, model, meta)
     print(f"model written to {out}")
     return 0
+
+
+def _fit_sessions(model: FOSModel, recs: list[Record], column: str,
+                  inputs: dict[str, int]) -> tuple[FOSModel, list[float]]:
+    """Fit ``model`` on several records of one sensor, each contiguous and at the same rate.
+
+    :func:`fosmodel.models.sessions.fit_sessions`.
+    """
+    from ..models.sessions import fit_sessions
+
+    rates = {rec.require_rate() for rec in recs}
+    if len(rates) > 1:
+        raise InputError("the sessions' rates differ: " + ", ".join(
+            f"{rec.source} {rec.rate:g} Hz" for rec in recs))
+    gapped = [rec.source for rec in recs if rec.segments]
+    if gapped:
+        raise InputError(f"{gapped[0]}: a session must be contiguous; pass --fill to "
+                         "interpolate across its gaps")
+    return fit_sessions(model, [rec.column(column) for rec in recs],
+                        [{n: rec.column(n) for n in inputs} for rec in recs])
+
+
+def _sessions_meta(recs: list[Record], constants: list[float]) -> dict:
+    """Return the meta of a model shared by sessions: each session and its own constant."""
+    return {"source": [rec.source for rec in recs],
+            "n_samples": [rec.n_samples for rec in recs],
+            "sessions": [{"source": rec.source, "constant": c}
+                         for rec, c in zip(recs, constants)],
+            "constant": "the model's constant is the mean session's; each session's own is its "
+                        "constant plus the session's, and a new session's is the mean one-step "
+                        "residual of the model over its first minutes "
+                        "(fosmodel.models.sessions.session_constant)"}
 
 
 def predict(args: argparse.Namespace) -> int:
@@ -213,33 +256,51 @@ def study(args: argparse.Namespace) -> int:
     return 0
 
 
+#: The command line's flag of each loop option its messages may name.
+LOOP_FLAGS = {"horizons_s": "--horizons", "train": "--split", "evaluate": "--split",
+              "aux": "--aux", "max_lag": "--max-lag", "units": "--units"}
+
+
 def close_loop(args: argparse.Namespace) -> int:
     from ..io.model_file import write_model
     from ..loop.closeloop import LoopConfig
     from ..loop.closeloop import close_loop as run_loop
     from ..loop.loop_report import CONSOLE_WIDTH, console_summary, write_loop_report
+    from ..loop.roles import channel_roles
 
     json_path = writable_file(args.json) if args.json else None
     model_path = writable_file(args.model) if args.model else None
     out = writable_directory(args.out)
-    refuse_overwrite({"--json": json_path, "--model": model_path}, {"the record": args.file})
-    if args.aux is not None and args.column in args.aux:
-        raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
-                         "residual (its lag 0 is the value predicted)")
-    rec = _load(args, columns=None if args.aux is None else [args.column, *args.aux])
+    refuse_overwrite({"--json": json_path, "--model": model_path},
+                     {f"the record {i + 1}": f for i, f in enumerate(args.files)})
+    several = len(args.files) > 1
+    args.file = args.files[0]  # a single record's notes are not prefixed with its name
+    recs = [_load(args, path if several else None) for path in args.files]
+    rec = recs[0]
     axis = _axes(args, [args.column], rec, optional=True)
-    y = rec.column(args.column)
-    aux = args.aux if args.aux is not None else [c for c in rec.names if c != args.column]
-    channels = {name: rec.column(name) for name in aux}
-    train, evaluate = args.split.fractions(rec.n_samples, rec.require_rate())
-    config = LoopConfig(rate=rec.require_rate(), sensor=axis[0].sensor if axis else None,
-                        units=axis[0].units if axis else None,
-                        max_lag=args.max_lag, train=train, evaluate=evaluate)
-    result = run_loop(y, channels, config, progress=lambda line: print(
+    channels = [{name: r.column(name) for name in r.names if name != args.column}
+                for r in recs]
+    sensor = axis[0].sensor if axis else _sensor_of(rec, args.column)
+    train, evaluate = args.split.fractions(min(r.n_samples for r in recs), rec.require_rate())
+    try:
+        roles = channel_roles(channels[0], sensor, aux=args.aux or (),
+                              sensors={c: s for c in channels[0] if (s := _sensor_of(rec, c))})
+        config = LoopConfig(rate=rec.require_rate(), sensor=axis[0].sensor if axis else None,
+                            units=axis[0].units if axis else None, max_lag=args.max_lag,
+                            train=train, evaluate=evaluate, horizons_s=args.horizons,
+                            companions=roles.companions, aux=roles.opted_in)
+    except OptionError as exc:
+        raise InputError(exc.with_flag(LOOP_FLAGS)) from None
+    say = lambda line: print(  # noqa: E731
         textwrap.fill(f"fosmodel: {line}", CONSOLE_WIDTH, subsequent_indent="fosmodel:     "),
-        file=sys.stderr, flush=True))
-    with report_directory(out, [args.file]) as tmp:
-        write_loop_report(result, tmp, args.title or f"{args.column} of {Path(args.file).name}")
+        file=sys.stderr, flush=True)
+    title = args.title or f"{args.column} of " + ", ".join(Path(f).name for f in args.files)
+    if several:
+        return _close_sessions(args, recs, channels, config, say, title, out, json_path,
+                               model_path)
+    result = run_loop(rec.column(args.column), channels[0], config, progress=say)
+    with report_directory(out, args.files) as tmp:
+        write_loop_report(result, tmp, title)
     if model_path:
         meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
                 "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment",
@@ -252,6 +313,47 @@ def close_loop(args: argparse.Namespace) -> int:
           + (f" and {json_path}" if json_path else "")
           + (f"; final model written to {model_path}" if model_path else ""))
     return 0
+
+
+def _close_sessions(args: argparse.Namespace, recs: list[Record], channels: list[dict],
+                    config: object, say: object, title: str, out: Path,
+                    json_path: Path | None, model_path: Path | None) -> int:
+    """``close-loop A B C``: the loop over sessions, its report, JSON and shared model."""
+    from ..io.model_file import write_model
+    from ..loop.sessions import Session, close_sessions
+    from ..loop.sessions_report import sessions_console, write_sessions_report
+
+    rates = {r.require_rate() for r in recs}
+    if len(rates) > 1:
+        raise InputError("the sessions' rates differ: " + ", ".join(
+            f"{r.source} {r.rate:g} Hz" for r in recs))
+    sessions = [Session(r.column(args.column), ch, Path(f).stem)
+                for r, ch, f in zip(recs, channels, args.files)]
+    result = close_sessions(sessions, config, progress=say)  # type: ignore[arg-type]
+    with report_directory(out, args.files) as tmp:
+        write_sessions_report(result, tmp, title)
+    if model_path:
+        meta = {"column": args.column, "rate_hz": recs[0].rate,
+                "fitted_on": "close-loop deciding parts of every session",
+                "effects": [step.effect.describe() for step in result.steps],
+                **_sessions_meta(recs, result.constants)}
+        write_model(model_path, result.final_model.model, meta)
+    print(sessions_console(result))
+    if json_path:
+        write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
+    print(f"residual loop report of {len(recs)} sessions written to {out.resolve()}/"
+          + (f" and {json_path}" if json_path else "")
+          + (f"; shared model written to {model_path}" if model_path else ""))
+    return 0
+
+
+def _sensor_of(rec: Record, column: str) -> str | None:
+    """Return the sensor a column's units (as its file declares them) or its name tell, if any."""
+    from ..noise.metrics import sensor_of
+
+    if column in rec.units:
+        return sensor_of(rec.units[column])
+    return infer_axis(column)[0]
 
 
 def allan(args: argparse.Namespace) -> int:

@@ -14,6 +14,7 @@ from .arguments import (
     STATIC_ONLY_HELP,
     UNITS_HELP,
     add_loader_options,
+    durations,
     exog_arg,
     inflation,
     int_list,
@@ -40,7 +41,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     fit = sub.add_parser("fit", help="fit a FOS model to one column of a record")
-    fit.add_argument("file", help=RECORD_HELP)
+    fit.add_argument("files", nargs="+", metavar="FILE",
+                     help=RECORD_HELP.replace("record:", "record, or several sessions of one "
+                                              "sensor (shared weights, a constant each):"))
     fit.add_argument("--column", required=True, help="column to model")
     add_loader_options(fit)
     fit.add_argument("--max-lag", type=int, default=10, help="L, output lags 1..L")
@@ -113,11 +116,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     loop = sub.add_parser("close-loop", help="find what the model lacks in its residual, "
                           "add it, report the error before and after")
-    loop.add_argument("file", help=RECORD_HELP)
+    loop.add_argument("files", nargs="+", metavar="FILE",
+                      help=RECORD_HELP.replace("record:", "record, or several sessions of one "
+                                               "sensor, each judged with the others fitted:"))
     loop.add_argument("--column", required=True, help="column to model")
     add_loader_options(loop, contiguous="the residual loop")
     loop.add_argument("--aux", type=name_list, metavar="COL[,COL...]",
-                      help="columns that may explain the residual (default: every other column)")
+                      help="companions to take as inputs all the same: other axes of the same "
+                           "IMU and kind, which measure the motion in use (default: none; every "
+                           "other column is read, the other axes as cross-axis noise, the rest "
+                           "as drivers)")
     loop.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS",
                       help="units of the column (deg/s, or gx=deg/s), which tell the sensor, "
                            "for position errors (default: from the column's name, e.g. gz_dps; "
@@ -127,6 +135,10 @@ def build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--max-lag", type=int, default=10, help="L of the starting model")
     loop.add_argument("--split", type=parsed(SplitSpec.parse), default="50%,20%",
                       metavar="TRAIN,EVALUATE", help=SPLIT_HELP)
+    loop.add_argument("--horizons", type=durations, default="30s,5min,30min",
+                      metavar="T[,T...]",
+                      help="outage lengths judged and reported, each where the segments hold "
+                           "enough windows (s, min or h)")
     loop.add_argument("--title", help="title of the report")
     loop.add_argument("--out", required=True, help="output directory (created)")
     loop.add_argument("--json", help="also write the before/after metrics and effects as JSON")

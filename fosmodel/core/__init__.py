@@ -25,6 +25,7 @@ if TYPE_CHECKING:
         generate_terms,
     )
     from .correlations import LagCorrelations
+    from .derived import power_name
     from .exceptions import (
         FitWarning,
         FOSModelError,
@@ -41,6 +42,7 @@ else:
         "candidates": ("CandidateSpec", "Term", "count_candidates", "evaluate_terms",
                        "generate_terms"),
         "correlations": ("LagCorrelations",),
+        "derived": ("power_name",),
         "exceptions": ("FOSModelError", "FitWarning", "InputError", "NotFittedError",
                        "UnstableModelWarning"),
         "fos": ("DataCorrelations", "FOSResult", "StopRule", "center"),
@@ -53,5 +55,5 @@ __all__ = [
     "CandidateSpec", "DataCorrelations", "FOSModelError", "FOSResult", "FitWarning",
     "InputError", "LagCorrelations", "NotFittedError", "StopRule", "Term",
     "UnstableModelWarning", "center", "clear_plans", "count_candidates", "evaluate_terms",
-    "generate_terms", "in_workers", "layout", "levels_for",
+    "generate_terms", "in_workers", "layout", "levels_for", "power_name",
 ]

@@ -14,8 +14,9 @@ name                       value at sample ``n`` (``t = n / rate`` from the reco
 ``step@<t0>s``             1 from ``t0`` on, 0 before
 ``sq(<ch>)``               ``(x - mu_x)^2``, ``mu_x`` the channel's training mean
 ``<ch>_fast<T>s``          ``x[n]`` minus its local level over ``T`` s (the exponentially
-                           weighted mean of ``x[n-1], x[n-2], ...``, :mod:`fosmodel.core.levels`):
-                           the channel's fast part, an input channel with lags of its own
+                           weighted mean of ``x[n-1], x[n-2], ...``, :mod:`fosmodel.core.levels`,
+                           started at the mean of the channel's first ``T`` s): the channel's
+                           fast part, an input channel with lags of its own
 ``lowpass(<ch>,<T>s)``     the channel through a first-order lag of time constant ``T``:
                            ``s[n] = s[n-1] + (x[n] - s[n-1]) / (T rate)``, ``s[0] = x[0]``
                            (a sensor that follows its driver late, as a die follows the air)
@@ -115,7 +116,14 @@ def token_channel(token: str) -> str:
     return "".join(out)
 
 
-def _match(name: str) -> tuple[str, ...] | None:
+def parse(name: str) -> tuple[str, ...] | None:
+    """Return ``(kind, arguments...)`` of a derived name as written, or None.
+
+    Examples
+    --------
+    >>> parse("lowpass(temp_c,600s)"), parse("pow(temp_c,2,25)")
+    (('lowpass', 'temp_c', '600'), ('power', 'temp_c', '2', '25'))
+    """
     for kind, pattern in _PATTERNS.items():
         m = pattern.match(name)
         if m:
@@ -127,13 +135,13 @@ def _power_base(text: str) -> tuple[str, str] | None:
     """``("channel", token)`` or ``("lowpass", name)``: what a power's base reads, or None."""
     if _IDENTIFIER.match(text):
         return "channel", text
-    found = _match(text)
+    found = parse(text)
     return ("lowpass", text) if found and found[0] == "lowpass" else None
 
 
 def is_derived(name: str) -> bool:
     """Whether a column name says how to compute the column."""
-    found = _match(name)
+    found = parse(name)
     return found is not None and (found[0] != "power" or _power_base(found[1]) is not None)
 
 
@@ -194,12 +202,12 @@ def channels_read(names: Iterable[str]) -> list[str]:
     """Return the record channels that derived columns among ``names`` read."""
     out = []
     for name in names:
-        found = _match(name)
+        found = parse(name)
         if found is None:
             continue
         if found[0] == "power":
             base = _power_base(found[1])
-            found = None if base is None else (_match(base[1]) if base[0] == "lowpass"
+            found = None if base is None else (parse(base[1]) if base[0] == "lowpass"
                                                else ("channel", base[1]))
         if found and (found[0] in _READS or found[0] == "channel"):
             channel = token_channel(found[1])
@@ -243,7 +251,7 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
         Not a derived name, or a column that reads a channel not given (or, for a square,
         without its mean).
     """
-    found = _match(name)
+    found = parse(name)
     if found is None or not is_derived(name):
         raise InputError(f"column {name!r} is not one fosmodel can derive; pass its values")
     kind = found[0]
@@ -267,7 +275,7 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
     if kind in _READS:
         x = _channel(name, found[1], n, channels)
         if kind == "fast":
-            return x - level_series(x, float(found[2]), rate)
+            return x - _level_from_mean(x, float(found[2]), rate)
         lagged = first_order_lag(x, float(found[2]), rate)
         if kind == "lowpass":
             return lagged
@@ -283,6 +291,19 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
     if kind == "exp":
         return np.exp(-t / arg)
     return (t >= arg).astype(float)
+
+
+def _level_from_mean(x: np.ndarray, tau_s: float, rate: float) -> np.ndarray:
+    """Return the local level of ``x`` over ``tau_s`` started at the mean of its first ``tau_s``.
+
+    Started at ``x[0]``, as the output's level is, the level of a noisy channel would carry
+    that one sample's noise for ``tau_s`` seconds: a transient whose mean over a fitting
+    segment a model takes for an offset, and carries into every outage after it.
+    """
+    if not len(x):
+        return x.copy()
+    start = float(np.mean(x[: max(1, round(tau_s * rate))]))
+    return level_series(np.r_[start, x], tau_s, rate)[1:]
 
 
 def _channel(name: str, token: str, n: int, channels: Mapping[str, np.ndarray]) -> np.ndarray:

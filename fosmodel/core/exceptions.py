@@ -7,6 +7,8 @@ code 2.  Anything else reaching the command line is a bug (exit code 1).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 
 class FOSModelError(Exception):
     """Base class of all fosmodel errors."""
@@ -18,6 +20,26 @@ class InputError(FOSModelError, ValueError):
     The message names the problem precisely: the file, the column and the
     first offending sample where they apply.
     """
+
+
+class OptionError(InputError):
+    """An option given wrongly, named in the library's own terms.
+
+    The message is written with ``{option}`` where the option is named: the library
+    says its keyword (``max_lag``), :meth:`with_flag` the command line's flag for it.
+    """
+
+    def __init__(self, template: str, keyword: str) -> None:
+        super().__init__(template.replace("{option}", keyword))
+        self.template, self.keyword = template, keyword
+
+    def with_flag(self, flags: Mapping[str, str] | None = None) -> str:
+        """Return the message naming the option by its flag.
+
+        The flag is ``flags[keyword]``, or ``--max-lag`` for ``max_lag``.
+        """
+        flag = (flags or {}).get(self.keyword, "--" + self.keyword.replace("_", "-"))
+        return self.template.replace("{option}", flag)
 
 
 def __getattr__(name: str) -> type:

@@ -386,6 +386,11 @@ def _expansion(model: object) -> _Expansion:
         return _Expansion(model.mean_, model.sigma2_, None, terms, {})
     if isinstance(model, FOSModel):
         check_fitted(model, "terms_")
+        if model.compensation:
+            raise InputError("the FOS model carries a compensation (a known function of its "
+                             "drivers, " + ", ".join(model.compensation) + "): its state space "
+                             "would leave it out; subtract it from the measurement and export "
+                             "the model fitted to what remains")
         q = float(model.mse_path_[-1]) if len(model.mse_path_) else float(model.mse_null_)
         terms = tuple((float(c), Term.parse(n)) for n, c in zip(model.terms_, model.coef_))
         used = [name for name in model.spec_.level_names

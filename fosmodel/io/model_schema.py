@@ -31,6 +31,7 @@ from ..core.candidates import OUTPUT, Term
 from ..core.exceptions import InputError
 from ..core.fos import STOP_RULES
 from ..core.levels import is_level, level_name
+from ..models.compensation import check_compensation
 from ..models.model import _ADDED_IN, FORMAT, FORMAT_VERSION
 
 #: Candidates no fit searches (its correlation tables hold a row per candidate): a file asking
@@ -47,12 +48,14 @@ MAX_GAIN = 1e6
 MAX_NAME = 1000
 
 _PARAMS = {  # FOSModel's parameters: how each is checked
-    "center": "bool", "columns": "names", "correlations": "correlations", "degree": "degree",
+    "center": "bool", "columns": "names", "compensation": "compensation",
+    "correlations": "correlations", "degree": "degree",
     "dependence_tol": "fraction", "exog_lags": "lags", "levels": "taus",
     "max_candidates": "max_candidates", "max_lag": "lag", "max_terms": "count",
     "product_lags": "count", "rate": "rate", "stop": "stop", "tol": "tolerance",
 }
-_OPTIONAL = {"columns", "exog_lags", "levels", "max_terms", "product_lags", "rate", "tol"}
+_OPTIONAL = {"columns", "compensation", "exog_lags", "levels", "max_terms", "product_lags", "rate",
+             "tol"}
 
 
 def check_model_dict(data: object) -> Mapping[str, Any]:
@@ -169,7 +172,21 @@ def _taus(value: object) -> str | None:
     return None
 
 
+def _compensation(value: object) -> str | None:
+    """Check that a compensation's names rebuild derived columns and its weights are bounded."""
+    if not isinstance(value, Mapping) or len(value) > MAX_CANDIDATES:
+        return "is not a map of derived column names to weights"
+    try:
+        weights = check_compensation(value)
+    except InputError as exc:
+        return f"is not a compensation ({exc})"
+    if any(len(name) > MAX_NAME or abs(w) > MAX_ABS for name, w in weights.items()):
+        return f"has a name over {MAX_NAME} characters or a weight over {MAX_ABS:g}"
+    return None
+
+
 _PARAM_CHECKS = {
+    "compensation": _compensation,
     "bool": lambda v: None if isinstance(v, bool) else "is not true or false",
     "names": _names,
     "correlations": lambda v: None if v in ("fast", "reference") else "is not fast or reference",

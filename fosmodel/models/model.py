@@ -56,12 +56,18 @@ from ..core.levels import (
     check_level_rate,
     check_level_series,
     checked_level_tau,
+    is_level,
     level_after,
     level_series,
     with_levels,
 )
 from ..core.validation import as_channels, as_signal, check_fitted
 from ..typeset.summary import Summary
+from .compensation import (
+    check_compensation,
+    compensation_channels,
+    compensation_series,
+)
 from .dynamics import (
     ar_free_run,
     ar_roots,
@@ -166,6 +172,11 @@ class FOSModel(BaseEstimator):
     correlations : {"fast", "reference"}
         Korenberg's correlation tables, or point by point on the candidate
         matrix (slow, for checking).
+    compensation : dict of str to float, optional
+        A known part of the output with fixed weights, by derived column name
+        (:mod:`fosmodel.models.compensation`): the model's terms are fitted to, and
+        its levels follow, the output minus ``sum_j w_j col_j``, which every
+        prediction and free run adds back.
 
     Attributes
     ----------
@@ -219,6 +230,7 @@ class FOSModel(BaseEstimator):
         dependence_tol: float = 1e-10,
         max_candidates: int = 100_000,
         correlations: str = "fast",
+        compensation: dict[str, float] | None = None,
     ) -> None:
         self.max_lag = max_lag
         self.degree = degree
@@ -234,6 +246,7 @@ class FOSModel(BaseEstimator):
         self.dependence_tol = dependence_tol
         self.max_candidates = max_candidates
         self.correlations = correlations
+        self.compensation = compensation
 
     # -- fitting -------------------------------------------------------------------------
 
@@ -277,6 +290,8 @@ class FOSModel(BaseEstimator):
             raise InputError(
                 f"correlations must be 'fast' or 'reference', not {self.correlations!r}")
         y_arr = as_signal(y, "y")
+        if check_compensation(self.compensation):
+            y_arr = y_arr - self._compensation(exog, len(y_arr))
         n_cand = count_candidates(spec)
         n0 = spec.lag_window
         log.info("FOS candidate set: %d candidates (L=%d, CP=%d, exog=%s, columns=%d)",
@@ -335,6 +350,16 @@ class FOSModel(BaseEstimator):
         if thin:
             warnings.warn(FitWarning(thin), stacklevel=2)
         return self
+
+    def _compensation(self, exog: Exog | None, n: int) -> np.ndarray:
+        """Return the compensation over ``n`` samples (zeros without one)."""
+        return compensation_series(check_compensation(self.compensation), exog, n, self.rate)
+
+    def _plain(self) -> FOSModel:
+        """Return this fitted model without its compensation: the model of ``y`` minus it."""
+        plain = copy.copy(self)
+        plain.compensation = None
+        return plain
 
     def _thin(self) -> str | None:
         """Return a note when the fitting window holds few samples per weight, else None."""
@@ -495,7 +520,9 @@ class FOSModel(BaseEstimator):
         names = [*self.spec_.exog_lags, *self.spec_.columns]
         rebuilt = [c for c in names if is_derived(c)] if self.rate is not None else []
         read = [c for c in names if c not in rebuilt]
-        return read + [c for c in channels_read(rebuilt) if c not in read]
+        return read + [c for c in [*channels_read(rebuilt),
+                                   *compensation_channels(self.compensation or {})]
+                       if c not in read]
 
     def _offsets_for(self, channels: Mapping[str, object]) -> dict[str, float]:
         return {OUTPUT: self.offsets_[OUTPUT], **{k: self.offsets_[k] for k in channels}}
@@ -518,6 +545,11 @@ class FOSModel(BaseEstimator):
         ndarray, or Series with the index of ``y`` if ``y`` is a Series
         """
         self._check_fitted()
+        if self.compensation:
+            y_arr = as_signal(y, "y")
+            comp = self._compensation(exog, len(y_arr))
+            pred = self._plain().predict(y_arr - comp, exog, segments, start=start)
+            return _as_input_type(np.asarray(pred) + comp, y)
         n0 = self.lag_window_
         if segments is not None:
             if start:
@@ -575,7 +607,7 @@ class FOSModel(BaseEstimator):
 
     def refit_weights(
         self, y: ArrayLike, exog: Exog | None = None,
-        segments: Sequence[slice] | None = None,
+        segments: Sequence[slice] | None = None, *, hold: bool = False,
     ) -> FOSModel:
         """Return a copy with the selected terms' weights fitted anew on ``y`` (least squares).
 
@@ -584,12 +616,25 @@ class FOSModel(BaseEstimator):
         dropped.  The residual loop uses it to ask how a model chosen on one
         stretch does when its weights come from an earlier one.
 
+        With ``hold`` and a level among the terms, the weights of the output's lags and
+        levels are fitted subject to summing to one (least squares under that equality,
+        :func:`_held_weights`): the model is then a local level with deviations about it,
+        and a free run holds the level it starts from instead of returning to the
+        training mean.  Least squares alone on a stretch where the wander is weak against
+        the noise puts that sum well below one, and an outage then drifts back to a mean
+        the bias has left.
+
         Returns
         -------
         FOSModel
         """
         self._check_fitted()
         y_arr = as_signal(y, "y")
+        if self.compensation:
+            refit = self._plain().refit_weights(y_arr - self._compensation(exog, len(y_arr)),
+                                                exog, segments, hold=hold)
+            refit.compensation = self.compensation
+            return refit
         n0 = self.lag_window_
         runs = _usable(segments, len(y_arr), n0)
         if sum(s.stop - s.start - n0 for s in runs) < len(self._terms) + 2:
@@ -598,17 +643,41 @@ class FOSModel(BaseEstimator):
         signals = self._signals(y_arr, exog, levels=segments is None)
         pieces = [self._with_levels({k: v[s] for k, v in signals.items()}, self.spec_)
                   for s in runs]
-        with one_blas_thread():
+        corr: Correlations
+        if self.correlations == "reference":
+            corr = DataCorrelations(
+                np.vstack([evaluate_terms(self._terms, piece, n0) for piece in pieces]),
+                np.concatenate([piece[OUTPUT][n0:] for piece in pieces]))
+        else:
             parts = [LagCorrelations(self._terms, piece, n0) for piece in pieces]
             corr = parts[0] if len(parts) == 1 else PooledCorrelations(parts)
+        with one_blas_thread():
             res = fos_search(corr, StopRule("max_terms", max_terms=len(self._terms)),
                               intercept=True, dependence_tol=self.dependence_tol)
         new = copy.copy(self)
-        new._set_terms([self._terms[i] for i in res.support], res.coef, res.intercept)
+        terms = [self._terms[i] for i in res.support]
+        dynamic = [any(ch == OUTPUT or is_level(ch) for ch, _ in t.factors) and t.degree == 1
+                   for t in terms]
+        if hold and any(is_level(t.factors[0][0]) for t, d in zip(terms, dynamic) if d):
+            res.coef, res.intercept = _held_weights(corr, res.support, np.array(dynamic))
+        new._set_terms(terms, res.coef, res.intercept)
         new.mse_path_, new.q_, new.mse_null_ = res.mse_path, res.q, res.mse_null
         new.coef_se_, new.intercept_se_ = res.coef_se, res.intercept_se
         new.n_samples_, new.stop_reason_ = res.n_samples, "refit"
         new.n_dependent_ = res.n_dependent
+        return new
+
+    def shifted(self, offset: float) -> FOSModel:
+        """Return a copy whose one-step predictions are ``offset`` higher (its constant moved).
+
+        Another session of the same sensor differs by its own constant (its turn-on
+        bias): ``offset`` is the mean one-step residual of this model over a stretch of
+        it (:func:`fosmodel.models.sessions.session_constant`).  A free run's level moves
+        by ``offset`` over one minus the sum of the output's own weights.
+        """
+        self._check_fitted()
+        new = copy.copy(self)
+        new._set_terms(self._terms, self.coef_, self.intercept_ + float(offset))
         return new
 
     def ar_coefficients(self) -> np.ndarray:
@@ -671,6 +740,11 @@ class FOSModel(BaseEstimator):
             (the samples from the divergence on are NaN).
         """
         self._check_fitted()
+        if self.compensation:
+            past = as_signal(y_init, "y_init")
+            comp = self._compensation(exog, len(past) + int(n_steps))
+            run = self._plain().simulate(past - comp[: len(past)], n_steps, exog, noise)
+            return run + comp[len(past):]
         n0 = self.lag_window_
         y0, drive = free_run_inputs(y_init, n_steps, noise, n0)
         warn_if_unstable(self.ar_coefficients(), "the fitted output dynamics")
@@ -724,6 +798,12 @@ class FOSModel(BaseEstimator):
         ndarray of shape (len(starts), n_steps)
         """
         self._check_fitted()
+        if self.compensation:
+            y_arr = as_signal(y, "y")
+            comp = self._compensation(exog, len(y_arr))
+            runs = self._plain().free_runs(y_arr - comp, starts, n_steps, exog)
+            at = np.asarray(starts, dtype=np.int64).reshape(-1, 1) + np.arange(n_steps)
+            return runs + comp[at]
         n, n0 = len(as_signal(y, "y")), self.lag_window_
         s = np.asarray(starts, dtype=np.int64).reshape(-1)
         if not s.size:
@@ -805,6 +885,9 @@ class FOSModel(BaseEstimator):
             *[(kind.upper(), f"{criterion(kind, final, len(self.terms_) + 1, self.n_samples_):.6g}")
               for kind in ("aic", "bic", "fpe")],
             ("Output offset mu_y", f"{self.offsets_[OUTPUT]:.6g}"),
+            *([("Compensation", " + ".join(f"{w:.6g} {name}"
+                                          for name, w in self.compensation.items()))]
+              if self.compensation else []),
         ]
         notes = [
             "Terms are products of centred signals: y[n-l] stands for y[n-l] - mu_y."
@@ -819,6 +902,9 @@ class FOSModel(BaseEstimator):
         thin = self._thin()
         if thin:
             notes.append(thin[0].upper() + thin[1:] + ".")
+        if self.compensation:
+            notes.append("The terms model the output minus the compensation (fixed weights on "
+                         "derived columns of the drivers); predictions and free runs add it back.")
         if spec.levels:
             notes.append("level@<tau>s is the exponentially weighted mean of the output's past "
                          "(time constant tau); in a free run it follows the model's own output.")
@@ -929,6 +1015,25 @@ class FOSModel(BaseEstimator):
         self._check_fitted()
         raw = expand_centred(self._terms, self.coef_, self.intercept_, self.offsets_)
         return {term.name: weight for term, weight in raw.items()}
+
+
+def _held_weights(corr: Correlations, support: np.ndarray,
+                  dynamic: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares weights of the ``support`` terms whose ``dynamic`` ones sum to one.
+
+    On the covariances (the intercept is ``mean(y) - means . w``): ``w = C^-1 (c + l a)``
+    with ``a`` the indicator of the dynamic terms and ``l`` the Lagrange multiplier that
+    makes ``a . w = 1``.
+    """
+    means = corr.means[support]
+    cov = np.column_stack([corr.column(int(j))[support] for j in support]) - np.outer(means,
+                                                                                     means)
+    target = corr.target[support] - means * corr.y_mean
+    a = dynamic.astype(float)
+    solve = np.linalg.pinv(cov)
+    base, step = solve @ target, solve @ a
+    w = base + (1.0 - a @ base) / (a @ step) * step
+    return w, float(corr.y_mean - means @ w)
 
 
 def _older_state(version: int, fitted: Mapping[str, object], n_terms: int) -> dict[str, object]:

@@ -188,7 +188,7 @@ def _steps(rec: Record, axes: list[Axis], aux: dict[str, np.ndarray],
     for a in axes if "loop" in config.steps else ():
         others = {k: v for k, v in channels.items() if k != a.column}
         out.loop[a.column] = out.timed("loop", a.column, partial(
-            close_loop, columns[a.column], others, imu.loop_config(rate, a)))
+            close_loop, columns[a.column], others, imu.loop_config(rate, a, axes)))
     return out
 
 

@@ -6,8 +6,10 @@ The Allan analysis fits all axes at once (:func:`fosmodel.noise.imu_noise.imu_no
 the study (:func:`fosmodel.study.runner.run_study`) and the loop
 (:func:`fosmodel.loop.closeloop.close_loop`) of each axis are independent tasks, run
 ``n_jobs`` at a time in worker processes (joblib), each reported as it ends.  The loop
-of an axis may use the record's other columns (the other axes, the temperature) as
-auxiliary channels.  The results are the same whatever ``n_jobs``: every step is
+of an axis reads the record's other columns by their role (:mod:`fosmodel.loop.roles`):
+the other axes of the same kind are its companions (never inputs, their correlation
+with the residual is cross-axis noise), the accelerometers drive a gyro and the
+temperature drives every axis.  The results are the same whatever ``n_jobs``: every step is
 deterministic.
 """
 
@@ -53,7 +55,8 @@ class ImuConfig:
     train_s, evaluate_s : float
         The study's fitting and selection segments (s); the rest is predicted.
     horizon_s, n_starts : float, int
-        Outage metrics of the study and the loop.
+        Outage metrics of the study (the loop judges and reports at its own horizons,
+        :data:`fosmodel.loop.config.HORIZONS_S`).
     loop_split : tuple of float, optional
         Fractions of the record the loop fits on and evaluates on (default: the study's
         segments, so that both steps score on one prediction segment; :meth:`for_record`
@@ -171,10 +174,12 @@ class ImuConfig:
             if "study" in steps:
                 resolved.study_config(rate, axis)
             if "loop" in steps:
-                resolved.loop_config(rate, axis)
+                resolved.loop_config(rate, axis, axes)
 
-    def loop_config(self, rate: float, axis: Axis) -> LoopConfig:
+    def loop_config(self, rate: float, axis: Axis, axes: Sequence[Axis] = ()) -> LoopConfig:
         """Configure the residual loop of one axis (of a configuration :meth:`for_record`).
+
+        The other ``axes`` of its kind are its companions.
 
         Raises
         ------
@@ -186,8 +191,9 @@ class ImuConfig:
                              "record with for_record(n, rate)")
         return LoopConfig(rate=rate, sensor=axis.sensor, units=axis.units,
                           max_lag=self.loop_max_lag, train=self.loop_split[0],
-                          evaluate=self.loop_split[1], horizon_s=self.horizon_s,
-                          n_starts=self.n_starts)
+                          evaluate=self.loop_split[1],
+                          companions=tuple(a.column for a in axes if a.sensor == axis.sensor
+                                           and a.column != axis.column))
 
 
 def _least_length(check: Callable[[int], object], n: int) -> int | None:
@@ -408,7 +414,8 @@ def _check(columns: Mapping[str, np.ndarray], axes: Sequence[Axis],
                          + ", ".join(f"{k} {v}" for k, v in lengths.items()))
 
 
-def _task(step: str, column: str, channels: Mapping[str, np.ndarray], axis: Axis, rate: float,
+def _task(step: str, column: str, channels: Mapping[str, np.ndarray], axis: Axis,
+          axes: Sequence[Axis], rate: float,
           config: ImuConfig) -> tuple[tuple[str, str], Any, float]:
     """One step of one axis (a worker process runs it); returns its key, result and time."""
     start = time.perf_counter()
@@ -417,15 +424,15 @@ def _task(step: str, column: str, channels: Mapping[str, np.ndarray], axis: Axis
         outcome: Any = run_study(y, config.study_config(rate, axis))
     else:
         others = {k: v for k, v in channels.items() if k != column}
-        outcome = close_loop(y, others, config.loop_config(rate, axis))
+        outcome = close_loop(y, others, config.loop_config(rate, axis, axes))
     return (column, step), outcome, time.perf_counter() - start
 
 
 def _run_tasks(channels: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: float,
                config: ImuConfig) -> Iterator[tuple[tuple[str, str], Any, float]]:
     """Run the study and the loop of every axis, longest first; yield them as they end."""
-    tasks = [(_task, (step, a.column, channels, a, rate, config)) for step in ("loop", "study")
-             for a in axes]
+    tasks = [(_task, (step, a.column, channels, a, axes, rate, config))
+             for step in ("loop", "study") for a in axes]
     yield from in_workers(tasks, config.n_jobs, ordered=False)
 
 
@@ -484,17 +491,28 @@ def _value(row: pd.Series | None, key: str) -> float:
 
 
 def loop_row(axis: Axis, loop: LoopResult) -> dict[str, Any]:
-    """Tabulate the effects an axis's loop kept and its errors before and after them."""
+    """Tabulate the effects an axis's loop kept and its errors before and after them.
+
+    The errors at 30 s outages, and its largest cross-axis correlation.
+    """
     before, after = loop.before, loop.after
+    strongest = max(loop.cross_axis, key=lambda c: abs(c["rho"]), default=None)
     return {"axis": axis.column, "units": axis.units,
             "effects kept": len(loop.steps),
             "kept": "; ".join(s.effect.describe() for s in loop.steps) or "none",
-            "outage error before (m)": before["outage_position_error_m"],
-            "outage error after (m)": after["outage_position_error_m"],
-            "30 s bias RMS before": before["bias_rms"]["30"],
-            "30 s bias RMS after": after["bias_rms"]["30"],
+            # NaN where the prediction segment holds too few 30 s windows to report them
+            "30 s outage error before (m)": _number(before["outage_position_error_m"].get("30")),
+            "30 s outage error after (m)": _number(after["outage_position_error_m"].get("30")),
+            "30 s bias RMS before": _number(before["bias_rms"].get("30")),
+            "30 s bias RMS after": _number(after["bias_rms"].get("30")),
+            "cross-axis noise (largest)": "none" if strongest is None else
+            f"{strongest['channel']} {strongest['rho']:+.3f}",
             "still firing": ", ".join(loop.unexplained) or "none",
-            "worse on prediction": ", ".join(loop.worse()) or "none"}
+            "worse on prediction": "; ".join(loop.worse()) or "none"}
+
+
+def _number(value: float | None) -> float:
+    return float("nan") if value is None else float(value)
 
 
 def _records(frame: pd.DataFrame) -> list[dict[str, Any]]:

@@ -24,6 +24,7 @@ import textwrap
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ..core.parallel import in_workers
@@ -273,8 +274,9 @@ def console_summary(result: ImuResult) -> str:
         "FOS (m)": study[f"FOS {outage}"].map(_brief_number),
         "base (m)": study[f"baseline {outage}"].map(_brief_number),
         "kept": loop["effects kept"],
-        "loop (m)": [f"{b:.3g} -> {a:.3g}" for b, a in
-                     zip(loop["outage error before (m)"], loop["outage error after (m)"])],
+        "loop (m)": ["-" if np.isnan(b) or np.isnan(a) else f"{b:.3g} -> {a:.3g}" for b, a in
+                     zip(loop["30 s outage error before (m)"],
+                         loop["30 s outage error after (m)"])],
     })
     lines = [f"Noise terms (Allan), {result.config.horizon_s:g} s outage position error of "
              "the best FOS and baseline "

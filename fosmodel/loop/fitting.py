@@ -1,0 +1,159 @@
+"""How the loop fits a candidate family on one record, and judges a trial out of sample."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from ..core.levels import level_name, level_series
+from ..models.bound import BoundModel
+from ..models.model import FOSModel
+from .config import LoopConfig
+from .driver_forms import refit_forms
+from .effects import CandidateFamily, Effect
+from .judge import Forecasts, Judgement, compare, forecasts, verdict
+from .record import LoopRecord
+from .scores import Plan
+
+
+class Fitter:
+    """Fits the FOS model of a candidate family on the fitting segment of one record.
+
+    It also refits the weights of such a model on shorter pasts.  The levels of the
+    (compensated) output are computed once per compensation and passed with the inputs
+    (a model would recompute them at every prediction and free run).
+    """
+
+    def __init__(self, record: LoopRecord, train: slice, config: LoopConfig) -> None:
+        self.record, self.train, self.config = record, train, config
+        self._targets: dict[tuple, np.ndarray] = {}
+        self._levels: dict[tuple, np.ndarray] = {}
+
+    def target(self, family: CandidateFamily) -> np.ndarray:
+        """Return the output minus the family's compensation: what its terms model."""
+        key = tuple(sorted(family.compensation.items()))
+        if key not in self._targets:
+            comp = family.compensation_series()
+            self._targets[key] = self.record.y if comp is None else self.record.y - comp
+        return self._targets[key]
+
+    def inputs(self, family: CandidateFamily) -> dict[str, np.ndarray]:
+        """Every array the family's model reads: its columns and the levels of its target."""
+        key = tuple(sorted(family.compensation.items()))
+        target = self.target(family)
+        for tau in family.levels:
+            if (tau, key) not in self._levels:
+                self._levels[tau, key] = level_series(target, tau, self.config.rate)
+        return {**family.arrays(),
+                **{level_name(tau): self._levels[tau, key] for tau in family.levels}}
+
+    def fit(self, family: CandidateFamily) -> BoundModel:
+        """Fit the family's FOS model on the fitting segment."""
+        inputs = self.inputs(family)
+        model = FOSModel(max_lag=family.max_lag, degree=family.degree,
+                         exog_lags=dict(family.exog_lags), columns=list(family.columns),
+                         levels=list(family.levels), rate=self.config.rate,
+                         product_lags=family.product_lags, stop=self.config.fos_stop,
+                         compensation=dict(family.compensation) or None)
+        train = self.train
+        past = {k: v[train] for k, v in inputs.items()}
+        model.fit(self.record.y[train], past)
+        if _holds(family):
+            model = model.refit_weights(self.record.y[train], past, hold=True)
+        return BoundModel(model, inputs)
+
+    def refit(self, bound: BoundModel, family: CandidateFamily, stop: int) -> BoundModel:
+        """``bound`` (of ``family``) with its weights fitted on the samples before ``stop``.
+
+        A compensation's weights are fitted anew there too (its forms stay), and the levels
+        follow the output it leaves: from an earlier origin a driver's sensitivity is what
+        the data before it say.
+        """
+        model, inputs = bound.model, bound.inputs
+        if family.compensation:
+            block, gain = family.comp_fit
+            weights = refit_forms(self.record.y, family.comp_columns, [slice(0, stop)], block,
+                                  gain)
+            family = family.changed(compensation=weights)
+            model = copy.copy(model)
+            model.compensation = weights
+            inputs = self.inputs(family)
+        past = {k: v[:stop] for k, v in inputs.items()}
+        return BoundModel(model.refit_weights(self.record.y[:stop], past, hold=_holds(family)),
+                          inputs)
+
+    def forget(self, keep: CandidateFamily) -> None:
+        """Drop what only other families read: their columns and levels."""
+        key = tuple(sorted(keep.compensation.items()))
+        self._targets = {k: v for k, v in self._targets.items() if k in ((), key)}
+        self._levels = {k: v for k, v in self._levels.items() if k[1] in ((), key)}
+        self.record.forget(set(keep.arrays()))
+
+
+def _holds(family: CandidateFamily) -> bool:
+    """Whether the family's levels are held (:meth:`FOSModel.refit_weights` with ``hold``).
+
+    With a compensation: its output has lost the driver's slow swing, so on the fitting
+    data its level wanders too little against the noise for least squares to weigh it
+    fully, and a free run would drift back to a training mean the bias has left.  Without
+    one the slow swing itself holds the weights near one, and a drift or a step beside the
+    level is fitted against a level that follows them only as least squares lets it.
+    """
+    return bool(family.levels and family.compensation)
+
+
+class Judge:
+    """Judges trial models against the current one out of sample (:mod:`fosmodel.loop.judge`).
+
+    The current model's refits and forecasts from every origin are computed once
+    per round.  An origin from which a trial's new terms cannot be estimated (a
+    step after it: the refit drops them) cannot judge it, and is left out.
+    """
+
+    def __init__(self, fitter: Fitter, current: BoundModel, family: CandidateFamily,
+                 where: Plan) -> None:
+        self.fitter, self.where, self.family = fitter, where, family
+        self.y, config = fitter.record.y, fitter.config
+        end = fitter.train.stop
+        self.origins = np.unique(np.linspace(end / 2, end, config.origins).round().astype(int))
+        if len(self.origins) > 1 and self.origins[0] <= max(4 * config.max_lag, 100):
+            self.origins = self.origins[-1:]  # too short a past to refit on
+        self.refits = [self._refit(current, family, o) for o in self.origins]
+        self.current = [self._forecasts(m) for m in self.refits]
+
+    @property
+    def origins_s(self) -> tuple[float, ...]:
+        """The fit origins in seconds, the fitting segment's end last."""
+        return tuple(float(o / self.fitter.config.rate) for o in self.origins)
+
+    def _refit(self, model: BoundModel, family: CandidateFamily, origin: int) -> BoundModel:
+        if origin == self.origins[-1]:
+            return model
+        return self.fitter.refit(model, family, int(origin))
+
+    def _forecasts(self, model: BoundModel) -> Forecasts:
+        return forecasts(model, self.y, self.where.segment, self.where.horizons)
+
+    def _earlier(self, trial: BoundModel, family: CandidateFamily, origin: int,
+                 current: BoundModel, base: Forecasts) -> tuple | None:
+        refit = self._refit(trial, family, origin)
+        if set(refit.model.terms_) <= set(current.model.terms_) \
+                and refit.model.compensation == current.model.compensation:
+            return None  # nothing new estimable
+        return compare(base, self._forecasts(refit))
+
+    def __call__(self, trial: BoundModel, family: CandidateFamily,
+                 effect: Effect) -> Judgement:
+        """Judge ``trial``: at the fitting segment's end, then from the earlier origins.
+
+        The earlier origins are looked at only for a trial that passes at the end.
+        """
+        alpha = self.fitter.config.accept_alpha
+        last = compare(self.current[-1], self._forecasts(trial))
+        if verdict(last, [], alpha, effect.strict) is None:
+            return Judgement(last, self.origins_s, None, None)
+        found = [self._earlier(trial, family, o, m, f) for o, m, f in
+                 zip(self.origins[:-1], self.refits[:-1], self.current[:-1])]
+        kept = verdict(last, [f for f in found if f is not None], alpha, effect.strict)
+        return Judgement(last, self.origins_s, tuple(found), kept)

@@ -1,0 +1,464 @@
+"""The residual loop over several sessions of one sensor, judged session by session.
+
+Each session (a record of the same sensor, another day) is split in time: the
+first ``train + evaluate`` of it *decides* (it is fitted on and judged on), the
+rest is *predicted* and decides nothing.  The model's dynamics and driver
+sensitivities are shared, each session keeps a constant of its own (its turn-on
+bias; :mod:`fosmodel.models.sessions`).
+
+The judge is leave-one-session-out: a candidate and the current model are
+fitted on the other sessions (their structure chosen there, a driver's weights
+too) and judged on the held-out one, which neither saw.  The held-out
+session's own constant comes from its first ``head_s`` seconds, which are then
+left out of what is judged: it is what a navigation filter learns of a turn-on
+bias at alignment, before the run it is to carry, and it looks at nothing that
+is judged.  The comparisons of every held-out session are pooled (their batches
+and outage windows together) into one verdict, and each held-out session plays
+the part an earlier origin plays on a single record (:func:`fosmodel.loop.judge.
+verdict`): a strict effect must lose nothing on any of them, the others must gain
+on average.  A line's
+phase and a step's time belong to one record: only the kinds several sessions
+may share are offered (``pooled``).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from ..core.derived import channels_read
+from ..core.exceptions import InputError
+from ..core.levels import level_name, level_series, levels_for
+from ..core.validation import as_channels, as_signal
+from ..models.bound import BoundModel
+from ..models.model import FOSModel
+from ..models.sessions import fit_sessions, session_constant
+from .config import LoopConfig
+from .diagnose import Finding
+from .driver_forms import refit_forms, still
+from .effects import CandidateFamily, Effect, Offer, effects_from
+from .findings import Diagnostics
+from .fitting import _holds
+from .intervals import Ratio, ratios
+from .judge import MIN_WINDOWS, Forecasts, Judgement, compare, forecasts, verdict
+from .record import LoopRecord
+from .roles import Roles, channel_roles
+from .rounds import Rejected, run_round
+from .scores import Outages, Plan, Scores, plan, scores
+
+Progress = Callable[[str], None]
+#: Fewest windows of a horizon a session's predicted part must hold for it to be reported.
+REPORT_WINDOWS = 2
+
+
+@dataclass(frozen=True)
+class Session:
+    """One recording of the sensor: the modelled column, the other channels, a name."""
+
+    y: Any
+    channels: Any = None
+    name: str = ""
+
+
+class SessionFitter:
+    """Fits a candidate family on the deciding parts of some sessions: shared weights.
+
+    The levels of the (compensated) output restart at each session's start, as its
+    derived columns do (:class:`LoopRecord`).
+    """
+
+    def __init__(self, record: LoopRecord, decide: tuple[slice, ...], config: LoopConfig) -> None:
+        self.record, self.decide, self.config = record, decide, config
+        self._targets: dict[tuple, np.ndarray] = {}
+        self._levels: dict[tuple, np.ndarray] = {}
+
+    def target(self, family: CandidateFamily) -> np.ndarray:
+        """Return the output minus the family's compensation."""
+        key = tuple(sorted(family.compensation.items()))
+        if key not in self._targets:
+            comp = family.compensation_series()
+            self._targets[key] = self.record.y if comp is None else self.record.y - comp
+        return self._targets[key]
+
+    def inputs(self, family: CandidateFamily) -> dict[str, np.ndarray]:
+        """Return every array the family's model reads, its levels session by session."""
+        key, target = tuple(sorted(family.compensation.items())), self.target(family)
+        for tau in family.levels:
+            if (tau, key) not in self._levels:
+                self._levels[tau, key] = np.concatenate([
+                    level_series(target[s], tau, self.config.rate) for s in self.record.sessions])
+        return {**family.arrays(),
+                **{level_name(tau): self._levels[tau, key] for tau in family.levels}}
+
+    def fit(self, family: CandidateFamily, which: Sequence[int] | None = None) -> BoundModel:
+        """Fit the family on the deciding parts of the sessions ``which`` (all by default).
+
+        The model's constant is that of their mean session; the compensation's weights are
+        the family's (see :meth:`refitted` for the weights of other sessions).
+        """
+        which = list(range(len(self.decide))) if which is None else list(which)
+        cfg, rec = self.config, self.record
+        target, inputs = self.target(family), self.inputs(family)
+        model = FOSModel(max_lag=family.max_lag, degree=family.degree,
+                         exog_lags=dict(family.exog_lags), columns=list(family.columns),
+                         levels=list(family.levels), rate=cfg.rate,
+                         product_lags=family.product_lags, stop=cfg.fos_stop)
+        arrays = {k: v for k, v in inputs.items() if not k.startswith("level@")}
+        # each session up to its deciding part's end: the fit, its centring included, reads
+        # nothing of what it is to predict
+        parts = [slice(rec.sessions[k].start, self.decide[k].stop) for k in which]
+        model, _ = fit_sessions(model, [target[s] for s in parts],
+                                [{k: v[s] for k, v in arrays.items()} for s in parts],
+                                [_relative(self.decide[k], rec.sessions[k]) for k in which],
+                                hold=_holds(family))
+        model.compensation = dict(family.compensation) or None
+        return BoundModel(model, inputs)
+
+    def refitted(self, family: CandidateFamily, which: Sequence[int]) -> CandidateFamily:
+        """Return the family with its compensation's weights fitted on the sessions ``which``."""
+        if not family.compensation:
+            return family
+        block, gain = family.comp_fit
+        weights = refit_forms(self.record.y, family.comp_columns,
+                              [self.decide[k] for k in which], block, gain)
+        return family.changed(compensation=weights)
+
+    def session(self, model: BoundModel, k: int, window: slice | None = None) -> BoundModel:
+        """Return ``model`` bound to session ``k`` with the constant fitting ``window`` of it.
+
+        ``window`` is in the session's own samples (default: its deciding part).
+        """
+        s = self.record.sessions[k]
+        inputs = {name: v[s] for name, v in model.inputs.items()}
+        y = self.record.y[s]
+        window = _relative(self.decide[k], s) if window is None else window
+        constant = session_constant(model.model, y, inputs, window)
+        return BoundModel(model.model.shifted(constant), inputs)
+
+    def forget(self, keep: CandidateFamily) -> None:
+        """Drop what only other families read."""
+        key = tuple(sorted(keep.compensation.items()))
+        self._targets = {k: v for k, v in self._targets.items() if k in ((), key)}
+        self._levels = {k: v for k, v in self._levels.items() if k[1] in ((), key)}
+        self.record.forget(set(keep.arrays()))
+
+
+def _relative(part: slice, session: slice) -> slice:
+    return slice(part.start - session.start, part.stop - session.start)
+
+
+class SessionJudge:
+    """Judges a trial leave-one-session-out against the current family (module docstring)."""
+
+    def __init__(self, fitter: SessionFitter, family: CandidateFamily, plans: list[Plan],
+                 head: int) -> None:
+        self.fitter, self.plans, self.head = fitter, plans, head
+        self.current = [self._forecasts(family, k) for k in range(len(plans))]
+
+    def _forecasts(self, family: CandidateFamily, k: int) -> Forecasts:
+        others = [j for j in range(len(self.plans)) if j != k]
+        fitted = self.fitter.fit(self.fitter.refitted(family, others), others)
+        bound = self.fitter.session(fitted, k, slice(0, self.head))
+        y = self.fitter.record.y[self.fitter.record.sessions[k]]
+        return forecasts(bound, y, self.plans[k].segment, self.plans[k].horizons)
+
+    def __call__(self, trial: BoundModel, family: CandidateFamily, effect: Effect) -> Judgement:
+        """Judge the trial's family on each held-out session, and on them all pooled."""
+        found = [self._forecasts(family, k) for k in range(len(self.plans))]
+        each = tuple(compare(a, b) for a, b in zip(self.current, found))
+        pooled = compare(_pool(self.current), _pool(found))
+        kept = verdict(pooled, list(each), self.fitter.config.accept_alpha, effect.strict)
+        return Judgement(pooled, (), None, kept, sessions=each)
+
+
+def _pool(parts: list[Forecasts]) -> Forecasts:
+    """Return every held-out session's forecasts end to end, each horizon's windows together."""
+    horizons = sorted({h for f in parts for h in f.biases})
+    return Forecasts(np.concatenate([f.one_step for f in parts]),
+                     {h: np.concatenate([f.biases[h] for f in parts if h in f.biases])
+                      for h in horizons})
+
+
+@dataclass
+class SessionStep:
+    """One effect kept over the sessions, with each session's predicted errors after it."""
+
+    effect: Effect
+    terms_added: list[str]
+    chosen: dict[str, Any]
+    judgement: Judgement
+    predict: Scores
+    sessions: list[Scores] = field(repr=False, default_factory=list)
+
+
+@dataclass
+class SessionsResult:
+    """Everything the loop did over several sessions.
+
+    ``before``/``after`` are the starting and final model's predicted errors, pooled over
+    the sessions and per session (``before_sessions``...); ``constants`` each session's own
+    constant of the final model, relative to its written constant.
+    """
+
+    config: LoopConfig
+    names: tuple[str, ...]
+    roles: Roles
+    before_scores: Scores
+    after_scores: Scores
+    before_sessions: list[Scores]
+    after_sessions: list[Scores]
+    steps: list[SessionStep]
+    rejected: list[Rejected]
+    findings_before: list[Finding]
+    findings_after: list[Finding]
+    base_model: BoundModel
+    final_model: BoundModel
+    constants: list[float]
+    judged: list[Plan]
+    reported: list[Plan]
+    level_taus: tuple[float, ...] = ()
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def before(self) -> dict[str, Any]:
+        """The starting model's predicted numbers, pooled over the sessions."""
+        return self.before_scores.to_dict()
+
+    @property
+    def after(self) -> dict[str, Any]:
+        """The final model's predicted numbers, pooled over the sessions."""
+        return self.after_scores.to_dict()
+
+    def ratios(self, session: int | None = None) -> list[Ratio]:
+        """Return the final model's ratios to the starting one, pooled or of one session."""
+        if session is None:
+            return ratios(self.before_scores, self.after_scores, self.config.confidence)
+        return ratios(self.before_sessions[session], self.after_sessions[session],
+                      self.config.confidence)
+
+    def worse(self) -> list[str]:
+        """Return what the final model made worse beyond its interval, pooled over the sessions.
+
+        The verdict is the pooled one; :meth:`worse_in` says it of each session.
+        """
+        return [r.text() for r in self.ratios() if r.verdict == "worse"]
+
+    def worse_in(self, session: int) -> list[str]:
+        """Return what the final model made worse beyond its interval in one session."""
+        return [r.text() for r in self.ratios(session) if r.verdict == "worse"]
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """Return the pooled before/after, each session's, the effects, the constants as JSON."""
+        return {"sessions": [{"name": name, "constant": c, "before": b.to_dict(),
+                              "after": a.to_dict(), "worse": self.worse_in(k),
+                              "ratios": {r.key: r.to_dict() for r in self.ratios(k)}}
+                             for k, (name, c, b, a) in enumerate(zip(
+                                 self.names, self.constants, self.before_sessions,
+                                 self.after_sessions))],
+                "before": self.before, "after": self.after,
+                "ratios": {r.key: r.to_dict() for r in self.ratios()},
+                "worse_on_prediction": self.worse(),
+                "effects": [{**s.effect.to_dict(), **s.chosen, "terms_added": s.terms_added,
+                             "evaluation": s.judgement.to_dict()} for s in self.steps],
+                "rejected": [r.to_dict() for r in self.rejected],
+                "roles": {"drivers": list(self.roles.drivers),
+                          "companions": list(self.roles.companions),
+                          "companions_as_inputs": list(self.roles.opted_in)},
+                "level_taus_offered": list(self.level_taus), "notes": self.notes}
+
+
+def close_sessions(sessions: Sequence[Session], config: LoopConfig,
+                   progress: Progress | None = None) -> SessionsResult:
+    """Run the residual loop over several sessions of one sensor (the module docstring).
+
+    Parameters
+    ----------
+    sessions : sequence of Session
+        Two or more records of the sensor, each with the same channels.
+    config : LoopConfig
+        ``train + evaluate`` of each session decides; ``head_s`` gives a held-out session
+        its constant.
+    progress : callable, optional
+        Called with a line of text as each model is fitted and each effect tried.
+
+    Returns
+    -------
+    SessionsResult
+
+    Raises
+    ------
+    InputError
+        Fewer than two sessions, sessions with other channels, or one too short.
+    """
+    say = progress or (lambda _: None)
+    record, names = _record(sessions, config)
+    roles = channel_roles(record.channels, config.sensor, config.companions, config.aux)
+    head = round(config.head_s * config.rate)
+    decide, predict, judged, reported = _parts(record, config, head)
+    fitter = SessionFitter(record, decide, config)
+    taus = config.level_taus if config.level_taus is not None else levels_for(
+        np.concatenate([record.y[p] for p in decide]), config.rate)
+    family = CandidateFamily(config.max_lag)
+    clock = time.perf_counter()
+    current = base = fitter.fit(family)
+    say(f"starting model: {len(base.model.terms_)} terms, shared by {len(names)} sessions "
+        f"({time.perf_counter() - clock:.1f} s)")
+    diagnose = Diagnostics(record, decide, roles, config)
+
+    def findings_of(model: BoundModel, fam: CandidateFamily) -> list[Finding]:
+        residuals = []
+        for k, part in enumerate(decide):
+            bound, rel = fitter.session(model, k), _relative(part, record.sessions[k])
+            y = record.y[record.sessions[k]][: rel.stop]
+            residuals.append((y - bound.predict(y))[rel][model.lag_window_:])
+        return diagnose.of(residuals, model.lag_window_, fam)
+
+    findings = findings_before = findings_of(current, family)
+    steps: list[SessionStep] = []
+    rejected: list[Rejected] = []
+    added: list[Effect] = []
+    waiting: list[Effect] = []
+    while len(steps) < config.max_effects:
+        offer = Offer(findings, record, decide, roles, config, family, tuple(taus))
+        found = effects_from(offer, keep=lambda cls: cls.pooled)
+        candidates = [e for e in [*found, *(w for w in waiting
+                                            if not any(w.same_as(f) for f in found))]
+                      if not any(e.same_as(a) for a in added)]
+        if not candidates:
+            break
+        say(f"round {len(steps) + 1}: {len(candidates)} effect(s) to try, each judged on "
+            f"every session held out")
+        chosen, refused, waiting = run_round(fitter, SessionJudge(fitter, family, judged, head),
+                                             family, candidates, record, say, len(steps) + 1)
+        rejected += refused
+        if chosen is None or chosen.family is None or chosen.model is None:
+            break
+        each = _scores(fitter, chosen.model, reported, config)
+        steps.append(SessionStep(chosen.effect, [t for t in chosen.model.model.terms_
+                                                 if t not in set(current.model.terms_)],
+                                 chosen.effect.chosen(chosen.model), chosen.judgement,
+                                 _pool_scores(each), each))
+        added.append(chosen.effect)
+        current, family = chosen.model, chosen.family
+        fitter.forget(family)
+        say(f"kept {chosen.effect.describe()}")
+        findings = findings_of(current, family)
+    before = _scores(fitter, base, reported, config)
+    after = steps[-1].sessions if steps else before
+    constants = [session_constant(current.model, record.y[s], {k: v[s] for k, v in
+                                                                current.inputs.items()},
+                                  _relative(p, s))
+                 for s, p in zip(record.sessions, decide)]
+    return SessionsResult(config, names, roles, _pool_scores(before), _pool_scores(after),
+                          before, after, steps, rejected, findings_before, findings, base,
+                          current, constants, judged, reported, tuple(taus),
+                          _notes(record, diagnose, fitter, family, roles, judged, names))
+
+
+def score_sessions(sessions: Sequence[Session], config: LoopConfig,
+                   effects: Sequence[Effect]) -> dict[str, Any]:
+    """Return the pooled predicted numbers of the starting model with ``effects`` added.
+
+    Fitted as :func:`close_sessions` fits (shared weights, a constant each, the same parts):
+    with the effects a user knows to be there, or a rival set of them, the yardstick of
+    what the loop kept.
+    """
+    record, _ = _record(sessions, config)
+    decide, _, _, reported = _parts(record, config, round(config.head_s * config.rate))
+    family = CandidateFamily(config.max_lag)
+    for effect in effects:
+        family = family.add(effect, record)
+    fitter = SessionFitter(record, decide, config)
+    return _pool_scores(_scores(fitter, fitter.fit(family), reported, config)).to_dict()
+
+
+def _record(sessions: Sequence[Session], config: LoopConfig) -> tuple[LoopRecord, tuple]:
+    """Return the sessions end to end, their channels checked alike."""
+    if len(sessions) < 2:
+        raise InputError(f"a loop over sessions needs two or more, got {len(sessions)}")
+    names = tuple(s.name or f"session {k + 1}" for k, s in enumerate(sessions))
+    ys = [as_signal(s.y, f"{name}: the record") for s, name in zip(sessions, names)]
+    channels = [as_channels(s.channels, list(s.channels or {}), len(y))
+                for s, y in zip(sessions, ys)]
+    for name, ch in zip(names[1:], channels[1:]):
+        if sorted(ch) != sorted(channels[0]):
+            first = ", ".join(sorted(channels[0])) or "none"
+            raise InputError(f"{name}: its channels ({', '.join(sorted(ch)) or 'none'}) are "
+                             f"not those of {names[0]} ({first})")
+    bounds = np.cumsum([0, *(len(y) for y in ys)])
+    spans = tuple(slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:]))
+    record = LoopRecord(np.concatenate(ys), {k: np.concatenate([c[k] for c in channels])
+                                             for k in channels[0]}, config.rate, spans, names)
+    return record, names
+
+
+def _parts(record: LoopRecord, config: LoopConfig, head: int) -> tuple:
+    """Each session's deciding and predicted parts, where it is judged and reported."""
+    decide, predict, judged, reported = [], [], [], []
+    horizons = (config.eval_horizon_s, *config.horizons_s)
+    for s, name in zip(record.sessions, record.names):
+        n = s.stop - s.start
+        cut = round((config.train + config.evaluate) * n)
+        judged_part = slice(head, cut)
+        if head <= config.max_lag + 10 or cut - head < 3 * round(config.eval_horizon_s
+                                                                 * config.rate):
+            raise InputError(f"{name} ({n} samples, {n / config.rate:.6g} s) is too short: its "
+                             f"first {config.head_s:g} s give its constant, and the "
+                             f"{config.train + config.evaluate:g} of it that decides must hold "
+                             f"three {config.eval_horizon_s:g} s outages after them")
+        decide.append(slice(s.start, s.start + cut))
+        predict.append(slice(s.start + cut, s.stop))
+        judged.append(plan(judged_part, horizons, config.rate, config.n_starts, name, 1))
+        reported.append(plan(slice(cut, n), config.horizons_s, config.rate, config.n_starts,
+                             f"{name} predicted", REPORT_WINDOWS))
+    pooled = {h: sum(len(p.horizons[h][0]) if h in p.horizons else 0 for p in judged)
+              for h in horizons}
+    for p in judged:
+        for h, count in pooled.items():
+            if count < MIN_WINDOWS:
+                p.horizons.pop(h, None)
+                p.skipped[h] = (f"the sessions hold {count} {h:g} s windows to judge, fewer "
+                                f"than {MIN_WINDOWS}")
+    return tuple(decide), predict, judged, reported
+
+
+def _scores(fitter: SessionFitter, model: BoundModel, reported: list[Plan],
+            config: LoopConfig) -> list[Scores]:
+    """Each session's predicted errors, the model with that session's own constant."""
+    out = []
+    for k, where in enumerate(reported):
+        bound = fitter.session(model, k)
+        y = fitter.record.y[fitter.record.sessions[k]]
+        out.append(scores(bound, y, where, config))
+    return out
+
+
+def _pool_scores(parts: list[Scores]) -> Scores:
+    """Return the sessions' scores together: their errors and windows end to end."""
+    horizons = sorted(set.intersection(*(set(p.outages) for p in parts))) if parts else []
+    outages = {}
+    for h in horizons:
+        got = [p.outages[h] for p in parts]
+        position = None if any(o.position is None for o in got) else np.concatenate(
+            [o.position for o in got if o.position is not None])
+        outages[h] = Outages(h, np.concatenate([o.bias for o in got]),
+                             np.concatenate([o.mse for o in got]), position)
+    return replace(parts[0], errors=np.concatenate([p.errors for p in parts]), outages=outages)
+
+
+def _notes(record: LoopRecord, diagnose: Diagnostics, fitter: SessionFitter,
+           family: CandidateFamily, roles: Roles, judged: list[Plan],
+           names: tuple[str, ...]) -> list[str]:
+    """Drivers that follow the slow residual but do not vary where fitted; horizons left out."""
+    target = fitter.target(family)
+    driven = set(channels_read([*family.compensation, *family.exog_lags]))
+    out = [text for ch in roles.slow if ch not in driven
+           for text in [still(record, diagnose.forms, ch, target)] if text]
+    skipped = {h: why for p in judged for h, why in p.skipped.items()
+               if "the sessions hold" in why}
+    out += [f"the {h:g} s horizon is not judged: {why}" for h, why in skipped.items()]
+    return out
