@@ -21,6 +21,7 @@ BEGIN, END = "<!-- API:begin -->", "<!-- API:end -->"
 #: The packages in the order of the layers, the package's face first.
 PACKAGES = ("fosmodel", "fosmodel.core", "fosmodel.typeset", "fosmodel.models", "fosmodel.io",
             "fosmodel.noise", "fosmodel.filter", "fosmodel.study", "fosmodel.loop",
+            "fosmodel.loop.effects",
             "fosmodel.workflows", "fosmodel.cli")
 
 

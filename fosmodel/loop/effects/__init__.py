@@ -28,7 +28,6 @@ import importlib
 import pkgutil
 
 from .base import (
-    SLOW_TESTS,
     Effect,
     Offer,
     effect_class,
@@ -44,5 +43,5 @@ from .family import CandidateFamily
 for _module in pkgutil.iter_modules(__path__):
     importlib.import_module(f"{__name__}.{_module.name}")
 
-__all__ = ["SLOW_TESTS", "CandidateFamily", "Effect", "Offer", "effect_class",
+__all__ = ["CandidateFamily", "Effect", "Offer", "effect_class",
            "effect_from_dict", "effects_from", "kinds", "make", "register", "unregister"]
