@@ -74,7 +74,8 @@ def test_the_loop_s_messages_name_no_command_line_flag():
 
 @pytest.mark.parametrize("sensor, expected", [
     ("gyro", (("temp_c", "ax_g", "ay_g", "vbat"), ("gy_dps", "gz_dps"))),
-    ("accel", (("temp_c", "gy_dps", "gz_dps", "vbat"), ("ax_g", "ay_g"))),
+    # an accelerometer's gyros measure the motion too: companions, never its drivers
+    ("accel", (("temp_c", "vbat"), ("ax_g", "ay_g", "gy_dps", "gz_dps"))),
     (None, (("temp_c", "vbat"), ("gy_dps", "gz_dps", "ax_g", "ay_g"))),
 ])
 def test_the_other_axes_of_the_same_kind_are_companions(sensor, expected):
@@ -100,3 +101,7 @@ def test_companions_given_or_told_by_the_file_and_taken_in_only_when_asked():
                                           r"columns \(did you mean 'w2'\?\)$"):
         channel_roles(names, "gyro", companions=["w22"])
     assert issubclass(OptionError, InputError)
+    accel = channel_roles(names, "accel", companions=["f1"],
+                          sensors={"w1": "gyro", "w2": "gyro", "f1": "accel"})
+    assert accel.companions == ("f1", "w1", "w2") and accel.drivers == ("temp",)
+    assert accel.told == "as given (and the gyros, which measure the motion)"

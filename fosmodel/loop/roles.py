@@ -5,9 +5,11 @@ model with it as an input is wrong once the sensor moves, however well it did on
 a static record.  So the other axes of the same kind as the modelled one (a gyro
 for a gyro, an accelerometer for an accelerometer) are *companions*: never
 inputs unless asked for (``LoopConfig.aux``); their correlation with the
-residual is reported as cross-axis noise.  Everything else is a *driver*, a
+residual is reported as cross-axis noise.  So are the gyros of an
+accelerometer: angular rate measures the motion too, and no error of an
+accelerometer is driven by what a gyro reads.  Everything else is a *driver*, a
 cause of the error measured in use: a temperature, a voltage, and the
-accelerometers for a gyro (its g-sensitivity).  Axes are recognised as the
+accelerometers for a gyro (its g-sensitivity: specific force).  Axes are recognised as the
 six-axis workflow recognises them (:func:`fosmodel.noise.axes.infer_axis`),
 unless the companions are given.
 """
@@ -104,6 +106,10 @@ def channel_roles(channels: Iterable[str], sensor: str | None,
     else:
         found = [c for c in names if sensor_of(c) == sensor]
         told = f"the other {sensor} axes, recognised by their names"
+    if sensor == "accel":  # a gyro measures the motion: never a cause of an accelerometer's error
+        gyros = [c for c in names if c not in found and sensor_of(c) == "gyro"]
+        found += gyros
+        told += " (and the gyros, which measure the motion)" if gyros else ""
     _among(aux, names, "aux")
     stray = [c for c in aux if c not in found]
     if stray:
