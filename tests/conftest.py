@@ -58,8 +58,8 @@ def readable_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Six axes (the static_imu scenario, 300 s at 100 Hz) under a header such as
     ``Gyro X (deg/s),...,Accel X (g)``, without a time column (``--rate 100``).
 
-    Accel X follows Accel Y two samples late, so that the residual loop of Accel X offers
-    Accel Y as an input, its lags and its square (terms named by the channel).
+    Accel X follows Accel Y two samples late, so that the residual loop of Accel X, asked to
+    take its companion Accel Y as an input, keeps its lags (terms named by the channel).
     """
     from data_synth import make_scenario
 

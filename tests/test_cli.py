@@ -700,7 +700,7 @@ def test_close_loop_reads_the_units_in_a_column_s_name(tmp_path, capsys):
                            tmp_path / "loop"], capsys)
     assert code == 0, err
     lines = out.splitlines()
-    assert lines[0] == ("prediction segment: MSE (deg/s)^2, outage position error (m, 30 s), "
+    assert lines[0] == ("prediction segment: MSE (deg/s)^2, outage position error (m), "
                         "bias RMS (deg/s)")
     assert lines[2].split()[-2] != "-"  # the outage error of the starting model, in metres
 
@@ -708,15 +708,16 @@ def test_close_loop_reads_the_units_in_a_column_s_name(tmp_path, capsys):
 @pytest.mark.slow
 def test_close_loop_on_a_readable_header_takes_any_channel_as_input(readable_csv, tmp_path,
                                                                    capsys):
-    """A channel ``Accel Y (g)`` enters the model with its lags and its square; the saved
-    model is applied again, its inputs read from the record by their headers."""
+    """A channel ``Accel Y (g)``, a companion asked for as an input, enters the model with its
+    lags; the saved model is applied again, its inputs read from the record by their headers."""
     model = tmp_path / "final.json"
     code, out, err = _run(["close-loop", readable_csv, "--column", "Accel X (g)", "--rate",
-                           "100", "--out", tmp_path / "loop", "--model", model], capsys)
+                           "100", "--aux", "Accel Y (g)", "--out", tmp_path / "loop", "--model",
+                           model], capsys)
     assert code == 0, err
-    assert out.startswith("prediction segment: MSE (g)^2, outage position error (m, 30 s), "
+    assert out.startswith("prediction segment: MSE (g)^2, outage position error (m), "
                           "bias RMS (g)\n")
-    assert "aux Accel Y (g) (lags 0-10 and its square)" in err
+    assert "kept companion Accel Y (g) as an input, as asked (fast part, lags 0-10)" in err
     fitted = FOSModel.from_dict(json.loads(model.read_text()))
     code, out, err = _run(["predict", readable_csv, "--model", model, "--rate", "100", "--out",
                            tmp_path / "pred.csv"], capsys)
