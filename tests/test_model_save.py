@@ -62,7 +62,7 @@ def test_weights_that_are_not_finite_are_refused(fitted, tmp_path):
     data = model.to_dict()
     data["fitted"]["coef"][0] = float("nan")
     (tmp_path / "nan.json").write_text(json.dumps(data))
-    with pytest.raises(InputError, match="a weight or offset is not a finite number"):
+    with pytest.raises(InputError, match=r"fitted\.coef\[0\]: nan is not a finite number"):
         FOSModel.load(tmp_path / "nan.json")
 
 
