@@ -16,7 +16,8 @@ from scipy.signal import lfilter
 
 from fosmodel import FOSModel
 from fosmodel.core.exceptions import InputError
-from fosmodel.io.model_file import MAX_BYTES, MAX_DEPTH, read_model, write_model
+from fosmodel.io.model_file import read_model, write_model
+from fosmodel.models.model_file import MAX_BYTES, MAX_DEPTH
 
 PEAK_MB = 1024
 
@@ -71,7 +72,7 @@ def test_what_is_no_regular_file_is_refused_without_reading_it(files, measured_r
 
 def test_a_file_that_grows_past_the_limit_while_read_is_refused(files, monkeypatch):
     path = files / "model.json"
-    monkeypatch.setattr("fosmodel.io.model_file.MAX_BYTES", path.stat().st_size - 1)
+    monkeypatch.setattr("fosmodel.models.model_file.MAX_BYTES", path.stat().st_size - 1)
     with pytest.raises(InputError, match="not a model file"):
         read_model(path)
     assert MAX_BYTES == 16 * 2**20

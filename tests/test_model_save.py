@@ -1,6 +1,7 @@
 """Model files: FOSModel.save and load, the JSON `fosmodel fit` writes, checked on reading."""
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -62,8 +63,46 @@ def test_weights_that_are_not_finite_are_refused(fitted, tmp_path):
     data = model.to_dict()
     data["fitted"]["coef"][0] = float("nan")
     (tmp_path / "nan.json").write_text(json.dumps(data))
-    with pytest.raises(InputError, match="a weight or offset is not a finite number"):
+    with pytest.raises(InputError, match=r"fitted\.coef\[0\]: nan is not a finite number"):
         FOSModel.load(tmp_path / "nan.json")
+
+
+def _refusals(path):
+    """The messages of ``FOSModel.load`` and the commands' ``read_model`` refusing ``path``."""
+    messages = []
+    for read in (FOSModel.load, read_model):
+        with pytest.raises(InputError) as error:
+            read(path)
+        messages.append(str(error.value))
+    return messages
+
+
+def test_load_refuses_a_fifo_and_dev_zero_unread_as_the_commands_do(tmp_path):
+    """A FIFO would block ``open`` until a writer came; /dev/zero would be read without end."""
+    os.mkfifo(tmp_path / "fifo.json")
+    (tmp_path / "zero.json").symlink_to("/dev/zero")
+    assert _refusals(tmp_path / "fifo.json") == [
+        f"cannot read model {tmp_path}/fifo.json: a FIFO, not a model file"] * 2
+    assert _refusals(tmp_path / "zero.json") == [
+        f"cannot read model {tmp_path}/zero.json (/dev/zero): a device, not a model file"] * 2
+
+
+@pytest.mark.parametrize("edit, problem", [
+    (lambda f: f.update(terms=["y[n-1000000000000]"]),
+     "fitted.terms[0]: 'y[n-1000000000000]' lags the output by 1000000000000 samples, outside "
+     "1 to params.max_lag 4"),
+    (lambda f: f["coef"].__setitem__(0, 1e300),
+     "fitted.coef[0]: 1e+300 is over 1e+30 in magnitude"),
+    (lambda f: f.update(terms=[f["terms"][0]] * len(f["terms"])),
+     "fitted.terms[1]: 'y[n-1]' repeats fitted.terms[0]"),
+])
+def test_load_refuses_a_forged_model_in_the_commands_line(fitted, tmp_path, edit, problem):
+    model, _ = fitted
+    data = model.to_dict()
+    edit(data["fitted"])
+    path = tmp_path / "forged.json"
+    path.write_text(json.dumps(data))
+    assert _refusals(path) == [f"{path}: corrupted model file: {problem}"] * 2
 
 
 def test_an_unfitted_model_is_not_saved(tmp_path):

@@ -15,7 +15,7 @@ from scipy.signal import lfilter
 
 from fosmodel import FOSModel
 from fosmodel.core.exceptions import InputError
-from fosmodel.io.model_schema import MAX_CANDIDATES, check_model_dict
+from fosmodel.models.model_schema import MAX_CANDIDATES, check_model_dict
 
 
 def _signal(n=3000, seed=0):

@@ -1,4 +1,4 @@
-"""Files written whole or not at all, and text files read with one-line errors.
+"""Files written whole or not at all, and regular files read bounded with one-line errors.
 
 Every file fosmodel writes goes through :func:`atomic_write`: the content is written to a
 temporary file in the destination directory and renamed over the destination, so an
@@ -6,6 +6,11 @@ interrupted run never leaves a half-written result.  The temporary file's name c
 writer's process id: one left behind by a killed run is removed by the next write to the
 same destination.  Here, at the bottom of the layers, so that a fitted model can save itself
 (:meth:`fosmodel.models.model.FOSModel.save`); :mod:`fosmodel.io.output` builds reports on it.
+
+Every file fosmodel reads whole into memory (a model file) goes through :func:`read_bounded`:
+a path that is no regular file (a FIFO, a device such as ``/dev/zero``, a directory) is refused
+from its metadata, and at most a given number of bytes is read.  Here too, so that
+``FOSModel.load`` and the commands' ``read_model`` share the one bounded read.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import contextlib
 import os
 import re
 import shutil
+import stat
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
@@ -109,17 +115,64 @@ def _mode() -> int:
     return 0o666 & ~umask
 
 
-def read_text(path: str | os.PathLike[str], what: str) -> str:
-    """Return the UTF-8 text of ``path``, a ``what`` (``"model"``...) the caller reads.
+def read_bounded(path: str | os.PathLike[str], what: str, max_bytes: int) -> bytes:
+    """Return the bytes of ``path``, a regular file of at most ``max_bytes``; refuse anything else.
+
+    What the path is comes from its metadata before it is opened, and again from the opened
+    file (it may have been swapped between the two); the file is opened without blocking, so
+    that a FIFO swapped in is refused rather than waited on, and a device such as
+    ``/dev/zero`` is never read to its (missing) end.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    what : str
+        What the caller reads (``"model"``), named in every message.
+    max_bytes : int
+        The largest file read.
 
     Raises
     ------
     InputError
-        The file cannot be read, or is not UTF-8 text (the message names it).
+        The path cannot be read, is no regular file, or holds more than ``max_bytes`` (the
+        message names it and why).
     """
+    path = Path(path)
     try:
-        return Path(path).read_text(encoding="utf-8")
+        _check_regular(path, os.stat(path), what)
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     except OSError as exc:
         raise InputError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a {what} file (not UTF-8 text)") from None
+    try:
+        info = os.fstat(fd)
+        _check_regular(path, info, what)
+        if info.st_size > max_bytes:
+            raise InputError(f"{path}: not a {what} file ({info.st_size:,} bytes; a {what} file "
+                             f"holds at most {max_bytes // 2**20} MiB)")
+        chunks, size = [], 0
+        while size <= max_bytes:
+            chunk = os.read(fd, min(2**20, max_bytes + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as exc:
+        raise InputError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    if size > max_bytes:  # it grew while read
+        raise InputError(f"{path}: not a {what} file (over {max_bytes:,} bytes; a {what} file "
+                         f"holds at most {max_bytes // 2**20} MiB)")
+    return b"".join(chunks)
+
+
+def _check_regular(path: Path, info: os.stat_result, what: str) -> None:
+    if stat.S_ISREG(info.st_mode):
+        return
+    kind = ("a directory" if stat.S_ISDIR(info.st_mode) else
+            "a FIFO" if stat.S_ISFIFO(info.st_mode) else
+            "a device" if stat.S_ISCHR(info.st_mode) or stat.S_ISBLK(info.st_mode) else
+            "a socket" if stat.S_ISSOCK(info.st_mode) else "not a regular file")
+    target = f" ({os.path.realpath(path)})" if path.is_symlink() else ""
+    raise InputError(f"cannot read {what} {path}{target}: {kind}, not a {what} file")

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import copy
 import logging
-import math
 import os
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -77,17 +76,12 @@ from .dynamics import (
     warn_if_unstable,
 )
 from .freerun import run_many, run_one, split_expansion
+from .model_schema import _ADDED_IN, FORMAT, FORMAT_VERSION
 from .rawform import expand_centred
 
 log = logging.getLogger(__name__)
 
-FORMAT = "fosmodel.FOSModel"
 _SAMPLES_PER_WEIGHT = 10  # below this per weight, a fit warns that its weights are rough
-FORMAT_VERSION = 2
-#: Fitted state a file of an older format version lacks, and what it reads as there:
-#: version 1 carried no standard errors.
-_ADDED_IN = {2: {"coef_se": lambda n_terms: [math.nan] * n_terms,
-                 "intercept_se": lambda n_terms: math.nan}}
 _BYTES_PER_VALUE = 8
 _PREDICT_ROWS = 2**20  # samples predicted at a time in a long record
 #: The channels and columns of a record, by name: a dict of arrays or a DataFrame.

@@ -1,7 +1,8 @@
 """What a model file may hold: each field's type and range, each term inside the model's own spec.
 
 :func:`check_model_dict` runs on the parsed JSON of a model file before anything is built from
-it (:func:`fosmodel.io.model_file.read_model`), so that a damaged or forged file is refused in
+it (:func:`fosmodel.models.model_file.load_model`, under both ``FOSModel.load`` and the
+commands' :func:`fosmodel.io.model_file.read_model`), so that a damaged or forged file is refused in
 one line naming the field, and never makes fosmodel allocate what it asks for (a lag of 10^12,
 a power of 10^9) nor predict with what no fit gives: a term twice, more terms than candidates,
 a weight that would scale the output's own spread a million times.
@@ -31,8 +32,15 @@ from ..core.candidates import OUTPUT, Term
 from ..core.exceptions import InputError
 from ..core.fos import STOP_RULES
 from ..core.levels import is_level, level_name
-from ..models.compensation import check_compensation
-from ..models.model import _ADDED_IN, FORMAT, FORMAT_VERSION
+from .compensation import check_compensation
+
+#: What a model file says it is, and the version of its format this fosmodel writes.
+FORMAT = "fosmodel.FOSModel"
+FORMAT_VERSION = 2
+#: Fitted state a file of an older format version lacks, and what it reads as there:
+#: version 1 carried no standard errors.
+_ADDED_IN = {2: {"coef_se": lambda n_terms: [math.nan] * n_terms,
+                 "intercept_se": lambda n_terms: math.nan}}
 
 #: Candidates no fit searches (its correlation tables hold a row per candidate): a file asking
 #: for more is refused before anything is counted or allocated for it.
