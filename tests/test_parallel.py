@@ -1,6 +1,7 @@
 """Independent calls in worker processes give what the same calls give here."""
 
 import operator
+import os
 import subprocess
 import sys
 
@@ -50,3 +51,10 @@ def test_a_worker_that_grows_is_kept_not_retired(tmp_path):
     done = subprocess.run([sys.executable, "run.py"], cwd=tmp_path, capture_output=True,
                           text=True, timeout=120, check=True)
     assert int(done.stdout) <= 2
+
+
+def test_a_call_runs_in_the_caller_s_directory(tmp_path, monkeypatch):
+    # the workers outlive a call: those started here must follow the caller elsewhere
+    assert list(in_workers(CALLS[:2], 2)) == HERE[:2]
+    monkeypatch.chdir(tmp_path)
+    assert set(in_workers([(os.getcwd, ())] * 4, 2)) == {str(tmp_path)}
