@@ -117,6 +117,48 @@ def test_the_loop_figure_draws_before_wide_under_after(loop_result):
         assert after.get_color() != before.get_color()
 
 
+def test_the_loop_figure_reads_with_one_legend_below_the_panels(loop_result, tmp_path):
+    fig = residual_figure(loop_result, "gx of rec.csv")
+    save_figure(fig, tmp_path, "residual")
+    assert figure_problems(fig) == []
+    assert len(fig.legends) == 1 and not any(ax.get_legend() for ax in fig.axes)
+
+
+def test_the_loop_figure_of_a_six_axis_record_reads(tmp_path, figure_log, capsys):
+    """Five channels beside the modelled one: the cross-correlation panel draws the two of the
+    largest correlation (four series), the text panel names the other three; the spectrum's
+    and the Allan deviation's curves lie between labelled ticks."""
+    from fosmodel.cli import main
+
+    log = figure_log()
+    csv = tmp_path / "rec.csv"
+    assert main(["synth", "static_imu", "--duration", "600", "--seed", "1", "--out",
+                 str(csv)]) == 0
+    assert main(["close-loop", str(csv), "--column", "gx_dps", "--out",
+                 str(tmp_path / "loop")]) == 0
+    capsys.readouterr()
+    checked = log()
+    assert [path.rsplit("/", 1)[-1] for path in checked] == ["residual.png"]
+    assert {path: problems for path, problems in checked.items() if problems} == {}
+
+
+def test_the_loop_figure_draws_the_strongest_channels_and_names_the_others():
+    n, rate = 15_000, 50.0
+    rng = np.random.default_rng(5)
+    drive = rng.standard_normal(n)
+    # the residual follows "strong" at lag 0, "middle" less; three channels are unrelated
+    y = 0.6 * drive + 0.3 * np.roll(drive, 1) + rng.standard_normal(n)
+    channels = {"strong": drive, "middle": np.roll(drive, 1) + 2.0 * rng.standard_normal(n),
+                **{f"noise{k}": rng.standard_normal(n) for k in range(3)}}
+    result = close_loop(y, channels, LoopConfig(rate=rate, sensor="gyro", units="deg/s"))
+    fig = residual_figure(result, "gx")
+    panel = fig.axes[3]
+    assert sorted({line.get_label().split()[1] for line in panel.lines}) == ["middle", "strong"]
+    text = fig.axes[7].texts[0].get_text()
+    assert "cross-correlation not drawn:" in text
+    assert all(f"noise{k}" in text.split("cross-correlation not drawn:")[1] for k in range(3))
+
+
 def test_the_study_figure_says_what_it_shows_and_reads(tmp_path):
     e = np.random.default_rng(0).standard_normal(7000)
     y = lfilter([1.0], [1.0, -0.8, 0.3], e)[1000:] * 0.01
@@ -207,10 +249,7 @@ def test_tidy_labels_apart_and_brackets_the_curves():
 
 def test_every_figure_of_a_study_reads(tmp_path, figure_log, capsys):
     """Each figure of ``study`` (both protocols), checked as it is written; the demo's figures
-    are checked in tests/test_cli.py's run of the demo.  The residual loop's figures (the
-    demo's ``loop_*/``) are left out: they do not pass these checks (legends over the traces,
-    ten series in the cross-correlation panel) and :mod:`fosmodel.loop.loop_report` is to be
-    held to them."""
+    are checked in tests/test_cli.py's run of the demo, the residual loop's below."""
     from fosmodel.cli import main
 
     log = figure_log()

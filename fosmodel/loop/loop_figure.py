@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..io.figures import PLAIN_DECADES, fit_title, legend_outside
 from ..typeset.latex import mathtext_units
 from .closeloop import LoopResult
 from .diagnose import Finding
@@ -22,16 +25,25 @@ def finding_name(finding: Finding) -> str:
 #: final thin, blue and dashed over it, so both show where they coincide.
 _STYLES: dict[str, dict[str, Any]] = {"before": {"color": "0.6", "lw": 2.6, "ls": "-"},
            "after": {"color": "C0", "lw": 1.1, "ls": "--"}}
+#: The channels the cross-correlation panel draws, those of the largest correlation: each is
+#: two series (before, after), and more than a few cannot be told apart; the others are named
+#: in the text panel.
+_SHOWN_CHANNELS = 2
+#: The shown channels' line styles, in order of correlation.
+_CHANNEL_LINES = ("-", ":")
 
 
 def residual_figure(result: LoopResult, title: str) -> Figure:
     """Plot the residual diagnostics of the first (wide, grey) and the final (thin, blue) model.
 
-    Every panel has its axes' labels.
+    Every panel has its axes' labels; one legend below the panels; the cross-correlation
+    panel draws the :data:`_SHOWN_CHANNELS` channels of the largest correlation and the text
+    panel names the others with their largest one.
     """
     fig = Figure(figsize=(16, 7.5), layout="constrained")
     axes = fig.subplots(2, 4).ravel()
     rate = result.config.rate
+    shown = _strongest_channels(result)
     for findings, label in ((result.findings_before, "before"),
                             (result.findings_after, "after")):
         style = _STYLES[label]
@@ -43,10 +55,11 @@ def residual_figure(result: LoopResult, title: str) -> Figure:
         al = by["allan"].plot
         axes[2].loglog(al["taus"], al["adev"], marker="o" if label == "before" else "s",
                        ms=5 if label == "before" else 3, label=label, **style)
-        aux = [f for f in findings if f.test == "aux" and f.plot]
-        for k, f in enumerate(aux):
-            axes[3].plot(f.plot["lags"], f.plot["rho"], label=f"{label} {f.evidence['channel']}",
-                         **{**style, "ls": ["-", "--", ":", "-."][k % 4]})
+        aux = {f.evidence["channel"]: f for f in findings if f.test == "aux" and f.plot}
+        for channel, ls in zip(shown, _CHANNEL_LINES):
+            f = aux[channel]
+            axes[3].plot(f.plot["lags"], f.plot["rho"], label=f"{label} {channel}",
+                         **{**style, "ls": ls})
         tr = by["trend"].plot
         axes[4].plot(tr["second"], tr["mean"], label=label, **style)
         axes[4].plot(tr["time"], tr["fit"], **{**style, "lw": 2 * style["lw"]})
@@ -61,18 +74,95 @@ def residual_figure(result: LoopResult, title: str) -> Figure:
     band = result.findings_before[0].plot["band"]
     for ax in (axes[0], axes[3]):
         ax.axhspan(-band, band, color="0.9", zorder=0)
+    if not shown:
+        axes[3].text(0.5, 0.5, "no other channel in the record", ha="center", va="center",
+                     transform=axes[3].transAxes)
+    for ax, band_too in zip(axes[:7], (True, False, False, True, False, False, False)):
+        _frame(ax, "x")
+        _frame(ax, "y", [-band, band] if band_too else [])
     for ax, (text, xlabel, ylabel) in zip(axes, _panels(result.config.units or "units")):
         ax.set_title(text, fontsize="medium")
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
-        if ax.lines:
-            ax.legend(fontsize="x-small", loc="upper right")  # "best" is slow on long records
     axes[7].axis("off")
-    axes[7].text(0, 1, _fired_text(result), va="top", family="monospace", fontsize="small")
-    fig.suptitle(mathtext_units("Residual diagnostics of the first (wide, grey) and the final "
-                                f"(thin, blue) model: {title}"))
+    axes[7].text(0, 1, _fired_text(result, shown), va="top", family="monospace",
+                 fontsize="small")
+    legend_outside(fig)
+    fit_title(fig, "Residual diagnostics of the first (wide, grey) and the final (thin, blue) "
+              "model", mathtext_units(title))
     return fig
+
+
+def _strongest_channels(result: LoopResult) -> list[str]:
+    """Return the channels the cross-correlation panel draws, the largest correlation first."""
+    largest = _largest_correlations(result)
+    return sorted(largest, key=lambda channel: -largest[channel])[:_SHOWN_CHANNELS]
+
+
+def _largest_correlations(result: LoopResult) -> dict[str, float]:
+    """Each channel's largest ``|rho|`` over the lags, of the first or the final model."""
+    largest: dict[str, float] = {}
+    for f in (*result.findings_before, *result.findings_after):
+        if f.test == "aux" and f.plot:
+            channel = f.evidence["channel"]
+            rho = float(np.max(np.abs(f.plot["rho"])))
+            largest[channel] = max(largest.get(channel, 0.0), rho)
+    return largest
+
+
+def _frame(ax: Axes, name: str, also: list[float] | None = None) -> None:
+    """Fix the limits and labelled ticks of one axis of ``ax`` to enclose its curves (and ``also``).
+
+    A linear axis: round steps, its ends labelled; a log one: limits at the 1, 2, 5 x 10^k
+    values (whole decades from :data:`fosmodel.io.figures.PLAIN_DECADES` on) that
+    :func:`fosmodel.io.figures.tidy` labels.  Set here, not left to ``tidy``'s bracketing,
+    which picks its ticks before the layout has sized the panels: on the final panel the
+    locator can choose another step, and a curve can run past the labelled ticks.
+    """
+    from matplotlib import ticker
+
+    if not ax.lines:
+        return  # an empty panel keeps matplotlib's frame
+    values = np.concatenate([np.asarray(line.get_ydata() if name == "y" else line.get_xdata(),
+                                        dtype=float) for line in ax.lines] + [also or []])
+    axis, set_lim = (ax.yaxis, ax.set_ylim) if name == "y" else (ax.xaxis, ax.set_xlim)
+    log = axis.get_scale() == "log"
+    values = values[np.isfinite(values) & ((values > 0) | (not log))]
+    if not values.size:
+        return
+    low, high = float(values.min()), float(values.max())
+    if log:
+        set_lim(*_log_limits(low, high))
+        return
+    if low == high:
+        low, high = low - 1.0, high + 1.0
+    ticks = ticker.MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]).tick_values(low, high)
+    first = max(t for t in ticks if t <= low)
+    last = min(t for t in ticks if t >= high)
+    kept = [t for t in ticks if first <= t <= last]
+    axis.set_major_locator(ticker.FixedLocator(kept))
+    set_lim(first, last)
+
+
+def _log_limits(low: float, high: float) -> tuple[float, float]:
+    """Return the 1, 2, 5 x 10^k values around ``low`` and ``high``, a decade apart at least."""
+    bottom, top = _round_125(low, up=False), _round_125(high, up=True)
+    if top / bottom < 10.0:  # within a decade tidy labels round steps that need not end here
+        bottom = _round_125(top / 10.0, up=False)
+    if math.log10(top / bottom) >= PLAIN_DECADES:  # labelled at the powers of ten only
+        bottom = 10.0 ** math.floor(math.log10(bottom) + 1e-12)
+        top = 10.0 ** math.ceil(math.log10(top) - 1e-12)
+    return bottom, top
+
+
+def _round_125(value: float, up: bool) -> float:
+    """Round ``value`` down (or ``up``) to a 1, 2, 5 x 10^k value."""
+    decade = 10.0 ** math.floor(math.log10(value))
+    steps = [1.0, 2.0, 5.0, 10.0]
+    if up:
+        return min(s for s in steps if s * decade >= value * (1 - 1e-12)) * decade
+    return max(s for s in steps if s * decade <= value * (1 + 1e-12)) * decade
 
 
 def _panels(units: str) -> list[tuple[str, str, str]]:
@@ -91,14 +181,25 @@ def _panels(units: str) -> list[tuple[str, str, str]]:
 
 
 def _smooth(s: np.ndarray, width: int = 25) -> np.ndarray:
-    return np.convolve(s, np.ones(width) / width, mode="same")
+    """Return the moving mean of ``s``; at the ends, the mean of the samples the window holds.
+
+    (``mode="same"`` alone averages zeros in at the ends and bends the curve down there.)
+    """
+    window = np.ones(width)
+    return np.convolve(s, window, mode="same") / np.convolve(np.ones_like(s), window,
+                                                             mode="same")
 
 
-def _fired_text(result: LoopResult) -> str:
+def _fired_text(result: LoopResult, shown: list[str]) -> str:
     lines = ["tests that fire (before -> after):"]
     for b, a in zip(result.findings_before, result.findings_after):
         yes = {True: "yes", False: "no"}
         lines.append(f"  {finding_name(b):<18} {yes[b.fired]:>3} -> {yes[a.fired]}")
     lines.append("effects kept:")
     lines += [f"  {s.effect.describe()}" for s in result.steps] or ["  none"]
+    largest = _largest_correlations(result)
+    hidden = [c for c in largest if c not in shown]
+    if hidden:  # the cross-correlation panel draws only the strongest channels
+        lines.append("cross-correlation not drawn:")
+        lines += [f"  {c:<16} max |rho| {largest[c]:.3f}" for c in hidden]
     return "\n".join(lines)
