@@ -124,8 +124,10 @@ def test_the_help_lists_the_options_with_their_defaults(capsys):
 
 @pytest.mark.slow
 def test_a_readable_header_goes_through_every_step(readable_csv, tmp_path, capsys):
-    """``Gyro X (deg/s),...,Accel X (g)``: units from the names, a loop that takes another
-    axis as its input, reports in folders named after the columns, models that apply again."""
+    """``Gyro X (deg/s),...,Accel X (g)``: units from the names, a loop that names the other
+    axes as companions and takes none as an input (Accel X follows Accel Y, which a model
+    must not use: in use it measures the motion), reports in folders named after the
+    columns, models that apply again."""
     from fosmodel.io.model_file import read_model
     from fosmodel.io.output import path_name
 
@@ -139,7 +141,9 @@ def test_a_readable_header_goes_through_every_step(readable_csv, tmp_path, capsy
     assert "fosmodel: Accel X (g): accel in g (from the name)" in err
     assert "fosmodel: Gyro Z (deg/s): gyro in deg/s (from the name)" in err
     assert list(pd.read_csv(out / "study.csv")["axis"]) == axes
-    assert "aux Accel Y (g) (lags 0-" in (out / "loop" / "Accel_X_g_" / "report.md").read_text()
+    loop = (out / "loop" / "Accel_X_g_" / "report.md").read_text()
+    assert "companions: Accel Y (g), Gyro Z (deg/s)" in loop
+    assert read_model(out / "models" / "Accel_X_g_.json").input_columns() == []
     for column in axes:
         assert (out / "study" / path_name(column) / "report.md").is_file()
         model = read_model(out / "models" / f"{path_name(column)}.json")

@@ -458,7 +458,7 @@ OPTION_CASES = [
     ("column-empty", READERS, ["--column", ""], "no column"),
     ("exog-missing", ("fit",), ["--exog", "tmp:2"], "no column 'tmp' (did you mean 'temp'?)"),
     ("exog-itself", ("fit",), ["--exog", "gx:1"], "cannot be its own input"),
-    ("aux-missing", ("close-loop",), ["--aux", "tmp"], "no column 'tmp'"),
+    ("aux-missing", ("close-loop",), ["--aux", "tmp"], "no channel 'tmp'"),
     ("aux-itself", ("close-loop",), ["--aux", "temp,gx"], "cannot explain its own residual"),
     ("scale-not-a-number", ALL, ["--scale", "gx=x"], "--scale 'gx=x': expected NAME=FACTOR"),
     ("scale-zero", ALL, ["--scale", "gx=0"], "--scale 'gx=0'"),

@@ -8,7 +8,7 @@ Derandomized and few examples: a few seconds in CI.
 """
 
 import numpy as np
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
@@ -37,6 +37,8 @@ def loggers(draw, rates=(10.0, 1e4)):
 @given(logger=loggers(), origin=st.integers(0, 900_000_000))
 def test_counts_from_boot_come_back_in_their_unit(logger, origin):
     unit, step, n = logger
+    # whole counts 1 apart are read as seconds at 1 Hz (a slow logger), not as 1 kHz in ms
+    assume(not (unit == "ms" and step == 1))
     read = time_unit("time", _stamps(unit, step, origin, n))
     assert read.unit == unit and read.seconds == UNITS[unit]
     assert f"integers {step:g} apart" in read.why

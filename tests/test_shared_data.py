@@ -77,7 +77,7 @@ def test_mpu6050_sunsided_sessions(stem):
     path = DATA / "mpu6050_sunsided" / f"{stem}.csv.gz"
     with pytest.raises(InputError, match="bursty receive time.*pass uniform=True"):
         load_record(path)
-    rec = load_record(path, uniform=True)
+    rec = load_record(path, uniform=True, outliers="keep")  # the y-down start-up transient
     assert rec.n_samples == SUNSIDED[stem]
     assert rec.rate == pytest.approx(99.3, abs=0.25)  # N / duration, README: ~99.3 Hz
     np.testing.assert_allclose(rec.time, np.arange(rec.n_samples) / rec.rate)
@@ -96,8 +96,11 @@ def test_mpu6050_sunsided_main_session():
     temp = rec.column("temp_c")
     assert 25.1 <= temp.min() and temp.max() <= 25.62  # README: 25.1-25.6 C on ~0.09 C steps
     assert rec.outliers == {}
-    start = load_record(DATA / "mpu6050_sunsided" / "unmoved-with-z-pointing-front-and-y-down"
-                        ".csv.gz", uniform=True)
+    y_down = DATA / "mpu6050_sunsided" / "unmoved-with-z-pointing-front-and-y-down.csv.gz"
+    with pytest.raises(InputError, match=r"column 'gx_dps': 3 outlier\(s\) .* at sample\(s\) "
+                                         r"0, 1, 2 .* carry 11 % of its mean square"):
+        load_record(y_down, uniform=True)  # by default: the user says what they are
+    start = load_record(y_down, uniform=True, outliers="keep")
     assert start.outliers["gx_dps"].tolist() == [0, 1, 2]  # 7.0-7.6 deg/s, settling to 4.5
 
 

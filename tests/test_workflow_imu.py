@@ -268,7 +268,7 @@ def test_a_segment_too_short_for_its_windows_is_told_whatever_the_length():
                                          r"too short for these settings: the study needs 68 s "
                                          r"\(.*\); the loop cannot run "
                                          r"with these settings, whatever the record's length "
-                                         r"\(.*three 5 s outages.*\); change train_s= and "
+                                         r"\(.*three outages of 5 s.*\); change train_s= and "
                                          r"evaluate_s= \(the loop's: loop_split=\) or "
                                          r"horizon_s=$"):
         config.check(6_000, 100.0, resolve_axes(["gx_dps"]))

@@ -281,6 +281,9 @@ def close_loop(args: argparse.Namespace) -> int:
     channels = [{name: r.column(name) for name in r.names if name != args.column}
                 for r in recs]
     sensor = axis[0].sensor if axis else _sensor_of(rec, args.column)
+    if args.column in (args.aux or ()):
+        raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
+                         "residual")
     train, evaluate = args.split.fractions(min(r.n_samples for r in recs), rec.require_rate())
     try:
         roles = channel_roles(channels[0], sensor, aux=args.aux or (),

@@ -104,6 +104,10 @@ def time_unit(name: str, time: np.ndarray, rate: float | None = None) -> TimeUni
                                                         f"{said}, rate={rate:g} Hz")
     dates = [u for u in UNITS if is_imu_rate(rates[u])
              and _EPOCH[0] <= time[0] * UNITS[u] <= _EPOCH[1]]
+    if not dates and is_imu_rate(rates["s"]):
+        # whole seconds at 1 Hz or more: a slow logger (a day-long thermal test at 1 Hz), not
+        # milliseconds at 1 kHz, which loggers that count milliseconds seldom reach exactly
+        return seconds
     usual = [u for u in UNITS if _USUAL_RATES[0] <= rates[u] < _USUAL_RATES[1]]
     unit = dates[0] if dates else usual[0] if usual else "s"
     if unit == "s":
@@ -121,5 +125,6 @@ def _integers(x: np.ndarray) -> bool:
 
 
 def is_imu_rate(rate: float) -> bool:
-    """Whether ``rate`` (Hz) is one an IMU samples at (``IMU_RATES``)."""
-    return IMU_RATES[0] <= rate <= IMU_RATES[1]
+    """Whether ``rate`` (Hz) is one an IMU samples at (``IMU_RATES``, give or take the clock's
+    1 %: a logger's 1 Hz may time out at 0.9999 Hz)."""
+    return IMU_RATES[0] * (1 - _TOLERANCE) <= rate <= IMU_RATES[1] * (1 + _TOLERANCE)
