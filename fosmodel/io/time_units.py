@@ -126,5 +126,6 @@ def _integers(x: np.ndarray) -> bool:
 
 def is_imu_rate(rate: float) -> bool:
     """Whether ``rate`` (Hz) is one an IMU samples at (``IMU_RATES``, give or take the clock's
-    1 %: a logger's 1 Hz may time out at 0.9999 Hz)."""
+    1 %: a logger's 1 Hz may time out at 0.9999 Hz).
+    """
     return IMU_RATES[0] * (1 - _TOLERANCE) <= rate <= IMU_RATES[1] * (1 + _TOLERANCE)
