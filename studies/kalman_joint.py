@@ -77,9 +77,11 @@ class Case:
 
 def records() -> dict[str, tuple[Record, dict]]:
     """The six-axis records at rest, with each column's sensor and units."""
-    out = {f"ADIS16405 imu{k}": (load_record(DATA / "adis16405" / f"imu{k}.csv.gz", rate=100),
+    out = {f"ADIS16405 imu{k}": (load_record(DATA / "adis16405" / f"imu{k}.csv.gz", rate=100,
+                                             outliers="keep"),
                                  ADIS) for k in range(1, 7)}
-    out["MPU-6050 sunsided"] = (load_record(DATA / "mpu6050_sunsided" / SUNSIDED, uniform=True),
+    out["MPU-6050 sunsided"] = (load_record(DATA / "mpu6050_sunsided" / SUNSIDED, uniform=True,
+                                                outliers="keep"),
                                 ADIS)
     out["MPU-6050 tomisuarez2"] = (load_mpu6050_static(), TOMI)
     return out

@@ -125,7 +125,8 @@ def _integers(x: np.ndarray) -> bool:
 
 
 def is_imu_rate(rate: float) -> bool:
-    """Whether ``rate`` (Hz) is one an IMU samples at (``IMU_RATES``, give or take the clock's
-    1 %: a logger's 1 Hz may time out at 0.9999 Hz).
+    """Whether ``rate`` (Hz) is one an IMU samples at (``IMU_RATES``, give or take 1 %).
+
+    A logger's clock moves its rate: a 1 Hz topic may time out at 0.9999 Hz.
     """
     return IMU_RATES[0] * (1 - _TOLERANCE) <= rate <= IMU_RATES[1] * (1 + _TOLERANCE)
