@@ -242,7 +242,7 @@ def test_imu_names_the_column_it_skips(records, tmp_path, capsys):
     static.iloc[:30_000].rename(columns={"gz_dps": "zg_dps"}).to_csv(typo, index=False)
     out = tmp_path / "report"
     code, stdout, err = _run(["imu", typo, "--rate", RATE, "--orders", "1", "--methods",
-                              "fos,burg", "--jobs", "1", "--split", "60s,60s", "--out", out],
+                              "fos,burg", "--jobs", "2", "--split", "60s,60s", "--out", out],
                              capsys)
     assert code == 0, err
     assert ("fosmodel: note: column 'zg_dps' skipped: its name tells neither a gyro nor an "
