@@ -116,6 +116,8 @@ def test_a_temporary_file_of_a_killed_run_goes_with_the_next_write(tmp_path):
     dead.wait()
     stale = tmp_path / f".out.txt.{dead.pid}.0123456789ab.tmp"
     stale.write_text("half")
+    kept = tmp_path / f".out.txt.{dead.pid}.0123456789ab.kept"  # a killed command's undo copy
+    kept.write_text("old")
     live = tmp_path / f".out.txt.{os.getpid()}.0123456789ab.tmp"  # another write in progress
     live.write_text("busy")
     write_text(tmp_path / "out.txt", "new")

@@ -21,7 +21,7 @@ import re
 import shutil
 import stat
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import IO
 
@@ -65,7 +65,9 @@ def remove_path(item: Path) -> None:
 
 
 @contextlib.contextmanager
-def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
+def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
+                 replace: Callable[[Path, Path], None] = os.replace,
+                 stale: tuple[str, ...] = (".tmp",)) -> Iterator[IO]:
     """Open a temporary file beside ``path``; rename it onto ``path`` on success.
 
     Parameters
@@ -74,6 +76,12 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
         Destination.  Its directory must exist.
     mode : {"w", "wb"}
         Text or binary mode.
+    replace : callable, default os.replace
+        Puts the written temporary file in place: ``replace(temporary, path)``
+        (:mod:`fosmodel.io.output` passes one that can undo it).
+    stale : tuple of str, default (".tmp",)
+        Suffixes of the files beside ``path`` that a killed writer may have left; removed
+        before writing.
 
     Yields
     ------
@@ -84,8 +92,9 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
     if mode not in ("w", "wb"):
         raise ValueError(f"mode must be 'w' or 'wb', not {mode!r}")
     path = Path(path)
-    for item in stale_temporaries(path, ".tmp"):  # left behind by a killed run
-        remove_path(item)
+    for suffix in stale:  # left behind by a killed run
+        for item in stale_temporaries(path, suffix):
+            remove_path(item)
     tmp = temporary_path(path, ".tmp")
     fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
     try:
@@ -95,7 +104,7 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)

@@ -1,10 +1,9 @@
 """Safe file output: never over an input, and either the old version or the complete new one.
 
-Every file fosmodel writes goes through :func:`~fosmodel.core.files.atomic_write` (a
-temporary file renamed over the destination, so an interrupted run never leaves a
-half-written result; imported here with :func:`~fosmodel.core.files.write_text` for the
-writers of reports).  A report
-directory is written beside its destination and moved into place in one step
+Every report file fosmodel writes goes through :func:`atomic_write`:
+:func:`fosmodel.core.files.atomic_write` (a temporary file renamed over the destination, so an
+interrupted run never leaves a half-written result) put in place through the command's journal.
+A report directory is written beside its destination and moved into place in one step
 (:func:`publish`).  :func:`refuse_overwrite` checks, before anything is read,
 that no output names a file the command reads, however the two are spelt.
 :func:`writable_file` and :func:`writable_directory` check an output's path before anything
@@ -23,11 +22,11 @@ import contextlib
 import os
 import re
 import shutil
-import uuid
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import IO, TYPE_CHECKING
 
+from ..core import files
 from ..core.exceptions import InputError, error_line
 from ..typeset.latex import table_label
 from ..typeset.markdown import markdown_table
@@ -146,43 +145,12 @@ def _cannot_write(path: Path, exc: OSError, staging: Path | None = None) -> Outp
     return OutputError(path, reason)
 
 
-def _temporary_name(path: Path, suffix: str) -> Path:
-    return path.parent / f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}{suffix}"
-
-
-def _stale(path: Path, suffix: str) -> Iterator[Path]:
-    """Temporary files or directories for ``path`` whose writer is no longer running."""
-    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(\d+)\.[0-9a-f]{{12}}{re.escape(suffix)}$")
-    with contextlib.suppress(OSError):
-        for item in path.parent.iterdir():
-            m = pattern.match(item.name)
-            if m and not _alive(int(m.group(1))):
-                yield item
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
-    return True
-
-
-def _remove(item: Path) -> None:
-    if item.is_dir() and not item.is_symlink():
-        shutil.rmtree(item, ignore_errors=True)
-    else:
-        with contextlib.suppress(FileNotFoundError):
-            item.unlink()
-
-
 @contextlib.contextmanager
 def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
     """Open a temporary file beside ``path``; rename it onto ``path`` on success.
+
+    :func:`fosmodel.core.files.atomic_write`, put in place through the command's journal (so
+    that a failed command undoes it) and with the system's refusal to write as one line.
 
     Parameters
     ----------
@@ -196,44 +164,25 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO]:
     file object
         Write the content to it.  If the body raises, the temporary file is
         removed and ``path`` is left untouched.
+
+    Raises
+    ------
+    OutputError
+        The system refused to write (the disk full, a directory where the file goes, ...).
     """
-    if mode not in ("w", "wb"):
-        raise ValueError(f"mode must be 'w' or 'wb', not {mode!r}")
     path = Path(path)
-    for item in [*_stale(path, ".tmp"), *_stale(path, journal.KEPT)]:  # of a killed run
-        _remove(item)
-    tmp = _temporary_name(path, ".tmp")
     try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, _mode())
+        with files.atomic_write(path, mode, replace=journal.replace,
+                                stale=(".tmp", journal.KEPT)) as fh:
+            yield fh
     except OSError as exc:
         raise _cannot_write(path, exc) from None
-    try:
-        fh = (os.fdopen(fd, "w", encoding="utf-8", newline="") if mode == "w"
-              else os.fdopen(fd, "wb"))
-        with fh:
-            yield fh
-            fh.flush()
-            os.fsync(fh.fileno())
-        journal.replace(tmp, path)
-    except BaseException as exc:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        if isinstance(exc, OSError):  # the disk full, a directory where the file goes, ...
-            raise _cannot_write(path, exc) from None
-        raise
 
 
 def write_text(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` to ``path`` atomically (UTF-8)."""
     with atomic_write(path, "w") as fh:
         fh.write(text)
-
-
-def _mode() -> int:
-    """Return the permission bits of a new file under the process's umask (0666 & ~umask)."""
-    umask = os.umask(0)
-    os.umask(umask)
-    return 0o666 & ~umask
 
 
 @contextlib.contextmanager
@@ -252,9 +201,9 @@ def report_directory(out: str | os.PathLike[str],
     while not base.is_dir():  # beside out, or in its nearest existing ancestor
         base = base.parent
     target = base / out.name
-    for item in _stale(target, ".tmpdir"):
-        _remove(item)
-    tmp = _temporary_name(target, ".tmpdir")
+    for item in files.stale_temporaries(target, ".tmpdir"):
+        files.remove_path(item)
+    tmp = files.temporary_path(target, ".tmpdir")
     try:
         tmp.mkdir()
     except OSError as exc:
