@@ -133,11 +133,10 @@ def test_demo_writes_outputs_and_says_where(tmp_path, capsys, figure_log):  # th
     assert (mpu / "study_ay" / "order_fair.png").exists()
     for axis in ("ax", "ay", "az", "gx", "gy", "gz"):
         assert (mpu / f"loop_{axis}" / "report.md").exists()
-    # every figure reads (tests/test_figures.py says what is checked; the loop's are left out)
+    # every figure reads (tests/test_figures.py says what is checked)
     checked = figures()
     assert len(checked) == len(list((tmp_path / "demo").rglob("*.png")))
-    assert {path: problems for path, problems in checked.items()
-            if problems and "/loop_" not in path} == {}
+    assert {path: problems for path, problems in checked.items() if problems} == {}
 
 
 @pytest.mark.slow

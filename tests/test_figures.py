@@ -8,7 +8,7 @@ import pytest
 from matplotlib.figure import Figure
 from scipy.signal import lfilter
 
-from fosmodel.io.figures import figure_problems, fit_title, plain_labels, tidy
+from fosmodel.io.figures import figure_problems, fit_title, legend_outside, plain_labels, tidy
 from fosmodel.io.output import FIGURE_DPI, save_figure
 from fosmodel.loop.closeloop import LoopConfig, close_loop
 from fosmodel.loop.loop_report import residual_figure
@@ -42,8 +42,9 @@ def test_the_png_has_300_dpi_and_the_svg_is_written_beside_it(tmp_path):
 
 
 def test_the_svg_is_drawn_once_in_the_layout_of_the_png(tmp_path):
-    # the PNG's save lays the figure out (one walk without drawing, then the drawing); the
-    # SVG's draws once in that layout, even under rc settings that ask for another engine
+    # tidy lays the figure out to pick its ticks (one draw without rendering), the PNG's save
+    # lays it out again (one walk without drawing, then the drawing); the SVG's draws once in
+    # that layout, even under rc settings that ask for another engine
     with matplotlib.rc_context({"figure.autolayout": True}):
         fig = Figure(figsize=(4.0, 3.0), layout="constrained")
         ax = fig.subplots()
@@ -59,8 +60,8 @@ def test_the_svg_is_drawn_once_in_the_layout_of_the_png(tmp_path):
 
         fig.draw = counted
         save_figure(fig, tmp_path, "layout")
-    assert draws == ["RendererAgg", "RendererAgg", "MixedModeRenderer"]  # the last: SVG
-    assert positions[1] == positions[2] != (0.125, 0.11, 0.775, 0.77)  # not matplotlib's default
+    assert draws == ["RendererAgg"] * 3 + ["MixedModeRenderer"]  # the last: SVG
+    assert positions[2] == positions[3] != (0.125, 0.11, 0.775, 0.77)  # not matplotlib's default
     assert fig.get_layout_engine() is None
 
 
@@ -245,6 +246,24 @@ def test_tidy_labels_apart_and_brackets_the_curves():
     assert low <= 10.0 and high >= 18.0  # the labelled ticks beyond the data
     assert plain_labels([0.1175, 0.118, 0.1185]) == ["0.1175", "0.118", "0.1185"]
     assert plain_labels([0.02, 0.05, 0.1]) == ["0.02", "0.05", "0.1"]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_tidy_brackets_with_the_ticks_of_the_laid_out_panels(tmp_path, seed):
+    # a small figure of many panels: the constrained layout shrinks them, and a locator on the
+    # shrunken panel labels fewer ticks than on the panel before the layout
+    rng = np.random.default_rng(seed)
+    fig = Figure(figsize=(6, 4), layout="constrained")
+    for ax in fig.subplots(3, 3).flat:
+        level, span = rng.uniform(-5, 5), 10 ** rng.uniform(-2, 2)
+        x = np.linspace(0, rng.uniform(1, 1000), 50)
+        for label in ("a", "b"):
+            ax.plot(x, level + span * rng.random(50), label=label)
+        ax.set(title="t", ylabel="a long label\nof two lines")
+    fig.suptitle("panels")
+    legend_outside(fig)
+    save_figure(fig, tmp_path, "panels")
+    assert figure_problems(fig) == []
 
 
 def test_every_figure_of_a_study_reads(tmp_path, figure_log, capsys):

@@ -7,8 +7,9 @@ calls :func:`tidy`:
   powers of ten (``0.02``, ``0.05``, ``0.1``; matplotlib would write ``1.22x10^1``, or
   label two decades only), or at round steps within one decade, each with the fewest digits
   that keep the labels apart (five ``0.118`` on a narrow axis say nothing);
-* the limits of an autoscaled axis reach out to the next labelled tick beyond the data, so
-  that every point of a curve can be read between two labels.
+* the limits of an autoscaled axis reach out to the next labelled tick beyond the data (the
+  ticks of the panel as laid out), so that every point of a curve can be read between two
+  labels.
 
 :func:`figure_problems` checks a drawn figure for what a reader cannot read: tick labels that
 repeat, a curve outside the labels' range or outside its axes, a legend over the data, more
@@ -51,6 +52,8 @@ _SMALL, _LEGEND_KEY = 0.95, 45.0
 _TEMPORARY = re.compile(r"^\.(.+)\.\d+\.[0-9a-f]{12}\.tmpdir$")
 #: A log axis spanning fewer decades is labelled at 1, 2 and 5 times the powers of ten.
 PLAIN_DECADES = 3
+#: The most layouts and bracketings :func:`tidy` runs (see there).
+_BRACKET_PASSES = 4
 #: The environment variable naming the file :func:`log_problems` appends to.
 FIGURE_LOG = "FOSMODEL_FIGURE_LOG"
 
@@ -62,7 +65,16 @@ def tidy(fig: Figure) -> None:
             low, high = sorted(_limits(ax, name))
             if axis.get_scale() == "log" and low > 0 and math.log10(high / low) < PLAIN_DECADES:
                 _plain_log(axis, high / low)
-            _bracket(ax, axis, name)
+    # A locator's ticks depend on its panel's size: the panels are sized first (the layout
+    # engine runs in a draw), so that the ticks bracketed are those the saved figure labels.
+    # Wider limits can lengthen the tick labels and so shrink a panel: bracketed again, until
+    # a layout leaves every limit where it was.
+    for _ in range(_BRACKET_PASSES):
+        fig.draw_without_rendering()
+        widened = [_bracket(ax, axis, name) for ax in fig.axes
+                   for axis, name in ((ax.xaxis, "x"), (ax.yaxis, "y"))]
+        if not any(widened):
+            return
 
 
 def _limits(ax: Axes, name: str) -> tuple[float, float]:
@@ -79,23 +91,31 @@ def _plain_log(axis: Axis, ratio: float) -> None:
     axis.set_minor_formatter(ticker.NullFormatter())
 
 
-def _bracket(ax: Axes, axis: Axis, name: str) -> None:
-    """Widen an autoscaled axis to the labelled ticks just beyond its curves' data."""
+def _bracket(ax: Axes, axis: Axis, name: str) -> bool:
+    """Widen an autoscaled axis to the labelled ticks just beyond its curves' data.
+
+    Returns whether its limits moved.
+    """
     autoscaled = ax.get_autoscalex_on() if name == "x" else ax.get_autoscaley_on()
     low, high = sorted(_limits(ax, name))
     # what the autoscaling saw (curves drawn with scalex/scaley False, as asymptotes, are not)
     first, last = sorted(ax.dataLim.intervalx if name == "x" else ax.dataLim.intervaly)
     if not autoscaled or not (np.isfinite(first) and np.isfinite(last)) or first == last:
-        return  # set by hand, or nothing drawn
-    ticks = [t for t in axis.get_major_locator().tick_values(low, high)
+        return False  # set by hand, or nothing drawn
+    # the ticks of a range that holds the data: a curve past the view's limits (a log axis
+    # autoscaled within a decade) is bracketed too
+    ticks = [t for t in axis.get_major_locator().tick_values(min(low, first), max(high, last))
              if np.isfinite(t) and (t > 0 or axis.get_scale() != "log")]
     below = max((t for t in ticks if t <= first), default=low)
     above = min((t for t in ticks if t >= last), default=high)
     new = (min(low, below), max(high, above))
+    if new == (low, high):
+        return False
     if name == "x":  # auto=None: a shared axis stays autoscaled for the next panel
         ax.set_xlim(*new, auto=None)
     else:
         ax.set_ylim(*new, auto=None)
+    return True
 
 
 def _data_lines(ax: Axes, name: str) -> Iterator[Line2D]:

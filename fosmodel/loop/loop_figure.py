@@ -116,9 +116,10 @@ def _frame(ax: Axes, name: str, also: list[float] | None = None) -> None:
 
     A linear axis: round steps, its ends labelled; a log one: limits at the 1, 2, 5 x 10^k
     values (whole decades from :data:`fosmodel.io.figures.PLAIN_DECADES` on) that
-    :func:`fosmodel.io.figures.tidy` labels.  Set here, not left to ``tidy``'s bracketing,
-    which picks its ticks before the layout has sized the panels: on the final panel the
-    locator can choose another step, and a curve can run past the labelled ticks.
+    :func:`fosmodel.io.figures.tidy` labels.  Set here, not left to ``tidy``'s bracketing:
+    within a decade ``tidy`` labels a log axis at round linear steps, none of which lies
+    below a curve that dips under the lowest one (the spectrum's), and the linear panels
+    keep the same frame before and after a model, whatever their data.
     """
     from matplotlib import ticker
 
