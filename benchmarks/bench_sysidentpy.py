@@ -43,7 +43,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from _common import limit_blas, machine_line
+from _common import limit_blas, machine_line, settle_allocator
 
 from fosmodel import FOSModel
 from fosmodel.core import Term, clear_plans, generate_terms, timed_parts
@@ -242,6 +242,7 @@ def main() -> int:
         print("skipped: sysidentpy is not installed (pip install sysidentpy)")
         return 0
     limit = limit_blas(args.blas_threads)  # noqa: F841 - the limit holds while it is referenced
+    settle_allocator()
     rows, rounds, lags = (2_000, 1, 4) if args.quick else (args.rows, args.rounds, 10)
     x, y = data(rows)
     y_fos, exog = fos_inputs(x, y)
