@@ -20,11 +20,12 @@ three terms (``x[n-1]``, ``y[n-1]``, ``y[n-1]*x[n-0]`` in fosmodel's names of th
 delayed input): the script checks that they are fosmodel's first three and in FROLS's
 final model (exit code 1 if not).
 
-It also measures where a fosmodel fit's time goes (one instrumented fit): the plan,
-the first pass (every candidate's mean, correlation with y and mean square), and each
-Gram column's pair products and matrix products, whose rate it sets against a
-1024 x 1024 x 1024 matrix product on one thread in the same run; and the fit's peak
-of allocated memory (tracemalloc) against the ``N x C`` matrix SysIdentPy forms.
+It also measures where a fosmodel fit's time goes (one fit, its parts read from the marks
+the correlation provider carries, ``fosmodel.core.timed_parts``): the plan, the first pass
+(every candidate's mean, correlation with y and mean square), and each Gram column's pair
+products and matrix products, whose rate it sets against a 1024 x 1024 x 1024 matrix
+product on one thread in the same run; and the fit's peak of allocated memory
+(tracemalloc) against the ``N x C`` matrix SysIdentPy forms.
 The figure goes to ``results/sysidentpy.png`` and ``docs/pages/figures/``.
 
 Run: ``python benchmarks/bench_sysidentpy.py [--rounds R] [--rows N] [--quick]``
