@@ -6,7 +6,9 @@ loop of consecutive calls lasting at least 20 ms and its time is the loop's
 mean, as ``timeit`` does (a single fast call right after FROLS would pay for
 the caches and fresh pages FROLS left behind).  BLAS runs on one thread (a
 FOS fit limits itself to one; Burg's dot products are faster on one thread on
-a shared 2-core machine too); ``--blas-threads`` changes it.  FOS is always timed
+a shared 2-core machine too); ``--blas-threads`` changes it.  Before any timing the
+allocator is settled (``_common.settle_allocator``): otherwise Burg's time swung by a
+factor of 1-4 with the fit timed before it (page faults).  FOS is always timed
 through ``FOSModel(...).fit``: candidate generation, correlations, search,
 weights and their standard errors.  ``FOS ms`` is a fit of a candidate set
 fitted before in the process (the usual case in a study: the same orders on
@@ -75,7 +77,7 @@ from functools import partial
 from pathlib import Path
 
 import numpy as np
-from _common import interleaved_median, limit_blas, machine_line
+from _common import interleaved_median, limit_blas, machine_line, settle_allocator
 from scipy.signal import lfilter
 from sklearn.linear_model import OrthogonalMatchingPursuit, orthogonal_mp_gram
 from statsmodels.regression.linear_model import burg
@@ -379,6 +381,7 @@ def main() -> None:
     parser.add_argument("--small", action="store_true", help="Table 1 alone (and its figure)")
     args = parser.parse_args()
     limit = limit_blas(args.blas_threads or None)  # noqa: F841 - holds while referenced
+    settle_allocator()
     repeats = 3 if args.quick else args.repeats
     signals = {"AR(4)": ar4_signal()}
     if not args.quick:

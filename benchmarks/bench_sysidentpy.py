@@ -20,11 +20,12 @@ three terms (``x[n-1]``, ``y[n-1]``, ``y[n-1]*x[n-0]`` in fosmodel's names of th
 delayed input): the script checks that they are fosmodel's first three and in FROLS's
 final model (exit code 1 if not).
 
-It also measures where a fosmodel fit's time goes (one instrumented fit): the plan,
-the first pass (every candidate's mean, correlation with y and mean square), and each
-Gram column's pair products and matrix products, whose rate it sets against a
-1024 x 1024 x 1024 matrix product on one thread in the same run; and the fit's peak
-of allocated memory (tracemalloc) against the ``N x C`` matrix SysIdentPy forms.
+It also measures where a fosmodel fit's time goes (one fit, its parts read from the marks
+the correlation provider carries, ``fosmodel.core.timed_parts``): the plan, the first pass
+(every candidate's mean, correlation with y and mean square), and each Gram column's pair
+products and matrix products, whose rate it sets against a 1024 x 1024 x 1024 matrix
+product on one thread in the same run; and the fit's peak of allocated memory
+(tracemalloc) against the ``N x C`` matrix SysIdentPy forms.
 The figure goes to ``results/sysidentpy.png`` and ``docs/pages/figures/``.
 
 Run: ``python benchmarks/bench_sysidentpy.py [--rounds R] [--rows N] [--quick]``
@@ -40,18 +41,15 @@ import sys
 import time
 import tracemalloc
 import warnings
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
-from _common import limit_blas, machine_line
+from _common import limit_blas, machine_line, settle_allocator
 
 from fosmodel import FOSModel
-from fosmodel.core import pairs
+from fosmodel.core import Term, clear_plans, generate_terms, timed_parts
 from fosmodel.core.blas import one_blas_thread
-from fosmodel.core.candidates import Term, generate_terms
-from fosmodel.core.pairs import PairCorrelations, pair_plan
-from fosmodel.core.shapes import clear_plans
+from fosmodel.core.pairs import pair_plan
 
 HERE = Path(__file__).resolve().parent
 FIGURES = HERE.parent / "docs" / "pages" / "figures"
@@ -116,66 +114,27 @@ def timed(fn, *args):
     return out, time.perf_counter() - t0, time.process_time() - c0
 
 
-@contextmanager
-def stopwatch(totals: dict, key: str):
-    t0 = time.perf_counter()
-    try:
-        yield
-    finally:
-        totals[key] = totals.get(key, 0.0) + time.perf_counter() - t0
-
-
 def where_time_goes(y: np.ndarray, exog: dict, lags: int) -> dict[str, float]:
     """One fit with its parts timed: seconds per part, and the tile products' multiply-adds.
 
-    The pair products and tile products are counted in the pass they belong to: the
-    first pass (every candidate's mean, correlation with y and mean square) or the Gram
-    columns of the selected terms.
+    The parts are those the correlations mark (``fosmodel.core.timed_parts``): the plan,
+    the first pass (every candidate's mean, correlation with y and mean square) and the
+    Gram columns of the selected terms, each with its pair products and tile products.
     """
-    totals: dict[str, float] = {}
-    products, add_tiles = pairs._products, pairs._add_tiles
-    pair_init, column = PairCorrelations.__init__, PairCorrelations.column
-    state = {"pass": "first pass", "fma": 0}
-
-    def timed_products(*args, **kwargs):
-        with stopwatch(totals, f"{state['pass']}: pair products"):
-            return products(*args, **kwargs)
-
-    def timed_tiles(acc, left, right, tiles):
-        state["fma"] += sum((b - a) * (d - c) for a, b, c, d in tiles) * left.shape[1]
-        with stopwatch(totals, f"{state['pass']}: tile products"):
-            return add_tiles(acc, left, right, tiles)
-
-    def timed_init(self, *args, **kwargs):
-        with stopwatch(totals, "plan"):
-            pair_plan(tuple(t.factors for t in args[0]))
-        state["pass"] = "first pass"
-        with stopwatch(totals, "first pass"):
-            pair_init(self, *args, **kwargs)
-
-    def timed_column(self, j):
-        state["pass"] = "Gram columns"
-        with stopwatch(totals, "Gram columns"):
-            return column(self, j)
-
     clear_plans()
     pair_plan.cache_clear()
-    pairs._products, pairs._add_tiles = timed_products, timed_tiles
-    PairCorrelations.__init__, PairCorrelations.column = timed_init, timed_column
-    try:
+    with timed_parts() as parts:
         t0 = time.perf_counter()
         fos_model(lags).fit(y, exog)
-        totals["fit"] = time.perf_counter() - t0
-    finally:
-        pairs._products, pairs._add_tiles = products, add_tiles
-        PairCorrelations.__init__, PairCorrelations.column = pair_init, column
+        fit = time.perf_counter() - t0
+    totals = {"fit": fit, **parts.seconds}
     for phase in ("first pass", "Gram columns"):  # zero where the set took the tables
         for part in ("", ": pair products", ": tile products"):
             totals.setdefault(phase + part, 0.0)
     totals.setdefault("plan", 0.0)
-    totals["search and model"] = totals["fit"] - totals["plan"] - totals["first pass"] - totals[
+    totals["search and model"] = fit - totals["plan"] - totals["first pass"] - totals[
         "Gram columns"]
-    totals["fma"] = state["fma"]
+    totals["fma"] = sum(n for k, n in parts.counts.items() if k.endswith("tile multiply-adds"))
     return totals
 
 
@@ -284,6 +243,7 @@ def main() -> int:
         print("skipped: sysidentpy is not installed (pip install sysidentpy)")
         return 0
     limit = limit_blas(args.blas_threads)  # noqa: F841 - the limit holds while it is referenced
+    settle_allocator()
     rows, rounds, lags = (2_000, 1, 4) if args.quick else (args.rows, args.rounds, 10)
     x, y = data(rows)
     y_fos, exog = fos_inputs(x, y)

@@ -113,7 +113,7 @@ CLIENTS = sorted([*ROOT.glob("studies/*.py"), *ROOT.glob("benchmarks/*.py"),
 #: Benchmarks that time the kernel's parts apart must reach inside it; each says why.
 INSIDE_THE_KERNEL = {
     "benchmarks/bench_fos_speed.py": "times the correlations, Gram columns and search apart",
-    "benchmarks/bench_sysidentpy.py": "times the pair and tile products of a large set apart",
+    "benchmarks/bench_sysidentpy.py": "clears the pair plan to time a first fit, one BLAS thread",
 }
 
 

@@ -52,6 +52,7 @@ from .shapes import (
     layout,
     plan_batch,
 )
+from .timing import part
 
 _GEMM_SAMPLES = 200_000  # from this window length, weighted sums of pairs go through BLAS
 _CHUNK = 4096  # samples per block of those sums: the block's factors stay in cache
@@ -151,7 +152,8 @@ class LagCorrelations:
         self._head_edges, self._tail_edges = self._edges(0), self._edges(n - n0)
         self._gram_rows: tuple[np.ndarray, np.ndarray] | None = None  # rows of a Gram column
         # everything the search needs before its first step, in one planned batch
-        first, rows = self._apply(plan.first, *plan.rows), plan.first_rows
+        with part("first pass"):
+            first, rows = self._apply(plan.first, *plan.rows), plan.first_rows
         self.y_mean, self.y_mean_sq = float(first[rows.y_mean]), float(first[rows.y_mean_sq])
         self.means, self.target, self.diag = first[rows.means], first[rows.target], first[rows.diag]
         self._columns = dict(zip(plan.linear.tolist(),
@@ -161,6 +163,11 @@ class LagCorrelations:
         """mean(p_c p_j) for every candidate c."""
         if j in self._columns:
             return self._columns[j]
+        with part("Gram columns"):
+            return self._new_column(j)
+
+    def _new_column(self, j: int) -> np.ndarray:
+        """Gram column ``j`` from new sums."""
         # the first column asked for that the first batch left out: all of them at once if
         # planned (the tables are still those of the first batch), else this one alone
         gram = gram_columns(*self._plan_key)

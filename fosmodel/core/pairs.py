@@ -36,6 +36,7 @@ from functools import lru_cache
 import numpy as np
 
 from .candidates import OUTPUT, Factor, Term
+from .timing import count, part
 
 MAX_DEGREE = 4  # heads and tails of two factors each
 _ROWS = 1024  # samples per block: a block's products stay in cache
@@ -170,7 +171,8 @@ class PairCorrelations:
         *,
         offsets: Mapping[str, float] | None = None,
     ) -> None:
-        plan = pair_plan(tuple(t.factors for t in terms))
+        with part("plan"):  # cached: only a first fit of the set plans
+            plan = pair_plan(tuple(t.factors for t in terms))
         self._plan = plan
         self._signals = [np.asarray(signals[ch], dtype=float) for ch in plan.names]
         self._offsets = [float((offsets or {}).get(ch, 0.0)) for ch in plan.names]
@@ -185,13 +187,15 @@ class PairCorrelations:
         y = self._signals[0][start:] - self._offsets[0]
         self.y_mean, self.y_mean_sq = float(y.mean()), float(y @ y) / self.n_samples
         y_row = len(plan.ch)  # a block's factors end with y, which no candidate holds
-        self.means, self.target, self.diag = self._sums(
-            [lambda f: None, lambda f: f[y_row]], squares=True)
+        with part("first pass"):
+            self.means, self.target, self.diag = self._sums(
+                [lambda f: None, lambda f: f[y_row]], squares=True)
 
     def column(self, j: int) -> np.ndarray:
         """mean(p_c p_j) for every candidate c."""
         mine = self._plan.symbols[j]
-        (out,) = self._sums([lambda f: np.prod(f[mine], axis=0)])
+        with part("Gram columns"):
+            (out,) = self._sums([lambda f: np.prod(f[mine], axis=0)])
         return out
 
     def _factors(self, lo: int, hi: int) -> np.ndarray:
@@ -217,15 +221,21 @@ class PairCorrelations:
             hi = min(lo + _ROWS, self._n)
             f = self._factors(lo, hi)
             heads, tails = self._heads[:, : hi - lo], self._tails[:, : hi - lo]
-            _products(f, plan.tail_groups, None, tails)
-            for k, weight in enumerate(weights):
-                _products(f, plan.head_groups, weight(f), heads)
-                _add_tiles(acc[k], heads, tails, plan.tiles)
-            if squares:
-                f *= f
+            with part("pair products"):
                 _products(f, plan.tail_groups, None, tails)
-                _products(f, plan.head_groups, None, heads)
-                _add_tiles(acc[-1], heads, tails, plan.tiles)
+            for k, weight in enumerate(weights):
+                with part("pair products"):
+                    _products(f, plan.head_groups, weight(f), heads)
+                with part("tile products"):
+                    _add_tiles(acc[k], heads, tails, plan.tiles)
+            if squares:
+                with part("pair products"):
+                    f *= f
+                    _products(f, plan.tail_groups, None, tails)
+                    _products(f, plan.head_groups, None, heads)
+                with part("tile products"):
+                    _add_tiles(acc[-1], heads, tails, plan.tiles)
+            count("tile multiply-adds", (len(weights) + squares) * plan.n_entries * (hi - lo))
         return [a[plan.where] / self.n_samples for a in acc]
 
 
