@@ -48,7 +48,7 @@ from .judge import MIN_WINDOWS, Forecasts, Judgement, compare, forecasts, verdic
 from .record import LoopRecord
 from .roles import Roles, channel_roles
 from .rounds import Rejected, run_round
-from .scores import Outages, Plan, Scores, plan, scores
+from .scores import BeforeAfter, Outages, Plan, Scores, plan, scores
 
 Progress = Callable[[str], None]
 #: Fewest windows of a horizon a session's predicted part must hold for it to be reported.
@@ -169,7 +169,7 @@ class SessionStep:
 
 
 @dataclass
-class SessionsResult:
+class SessionsResult(BeforeAfter):
     """Everything the loop did over several sessions.
 
     ``before``/``after`` are the starting and final model's predicted errors, pooled over
@@ -195,16 +195,6 @@ class SessionsResult:
     reported: list[Plan]
     level_taus: tuple[float, ...] = ()
     notes: list[str] = field(default_factory=list)
-
-    @property
-    def before(self) -> dict[str, Any]:
-        """The starting model's predicted numbers, pooled over the sessions."""
-        return self.before_scores.to_dict()
-
-    @property
-    def after(self) -> dict[str, Any]:
-        """The final model's predicted numbers, pooled over the sessions."""
-        return self.after_scores.to_dict()
 
     def ratios(self, session: int | None = None) -> list[Ratio]:
         """Return the final model's ratios to the starting one, pooled or of one session."""
