@@ -122,8 +122,20 @@ def truth_metrics(rec, y, channels, config, res) -> dict:
     return score_family(y, channels, config, family)
 
 
-def names(kept: Effect, true: Effect) -> bool:
-    """Whether a kept effect is the true one: its kind, and its channel or frequency."""
+def carries_level(step) -> bool:
+    """Whether a kept step put a local level in the model: the level itself, or a driver's
+    slow part that came with the level of its compensated output and kept one."""
+    return step.effect.kind == "level" or (step.effect.kind == "driver"
+                                           and bool(getattr(step.effect, "level_taus", None))
+                                           and step.tau_s is not None)
+
+
+def names(step, true: Effect) -> bool:
+    """Whether a kept step is the true effect: its kind, and its channel or frequency (a
+    driver's slow part with the level names a random walk too)."""
+    kept = step.effect
+    if true.kind == "level":
+        return carries_level(step)
     if kept.kind != true.kind:
         return False
     if true.kind == "driver":
@@ -144,12 +156,11 @@ def effect_seed(label: str, scenario: str, overrides: dict, seed: int) -> dict[s
     """One seed of a short record: what was named, and (seed 0) its row and report."""
     rec, y, channels, config, res = run(scenario, seed, **overrides)
     truths = loop_truth(rec.truth)
-    kept = [s.effect for s in res.steps]
-    level = any(e.kind == "level" for e in kept)
-    named = [any(names(e, t) for e in kept) for t, _ in truths]
+    level = any(carries_level(s) for s in res.steps)
+    named = [any(names(s, t) for s in res.steps) for t, _ in truths]
     followed = [n or (slow and level) for n, (_, slow) in zip(named, truths)]
-    others = [e for e in kept if not any(names(e, t) for t, _ in truths)
-              and not (e.kind == "level" and any(slow for _, slow in truths))]
+    others = [s for s in res.steps if not any(names(s, t) for t, _ in truths)
+              and not (s.effect.kind == "level" and any(slow for _, slow in truths))]
     out = {"named": all(named), "followed": all(followed), "others": bool(others),
            "lower": res.after["bias_rms"].get("30", np.inf)
            < res.before["bias_rms"].get("30", -np.inf)}

@@ -405,7 +405,7 @@ def named_effects(loops: dict, recs, temp: pd.DataFrame) -> list[str]:
         f"{100 * ay['One-step MSE change']:+.2f} % and its 30 s bias RMS by "
         f"{100 * ay['30 s bias RMS change']:+.1f} %. The loop itself "
         + ("keeps temp_c on ay." if took else "does not keep temp_c on ay: "
-           + _rejection(loop_ay, "driver temp_c")))
+           + _rejection(loop_ay, "driver temp_c") + _slow_not_offered(loop_ay, ay)))
     for axis in ("ax_g", "ay_g", "az_g"):
         res = loops[("ADIS16405 imu1", axis)]
         ratio, peak = band_ratio(res, 100.0, 0.5, 0.62)
@@ -443,9 +443,21 @@ def named_effects(loops: dict, recs, temp: pd.DataFrame) -> list[str]:
 def _rejection(res: LoopResult, prefix: str) -> str:
     rej = [r for r in res.rejected if r.effect.describe().startswith(prefix)]
     if rej:
-        return ("it was tried and rejected on the evaluation segment: "
-                f"{evaluation_text(rej[0].judgement)}.")
+        return "; ".join(f"{r.effect.describe()} was tried and rejected on the evaluation "
+                         f"segment: {evaluation_text(r.judgement)}" for r in rej) + "."
     return "no diagnostic pointed to it (none of its tests fired)."
+
+
+def _slow_not_offered(res: LoopResult, row: pd.Series) -> str:
+    """Say so when a driver's slow part never reached the judge: its test did not fire."""
+    tried = [r for r in res.rejected if getattr(r.effect, "part", None) == "slow"]
+    if tried:
+        return ""
+    kept = "; ".join(s.effect.describe() for s in res.steps) or "nothing"
+    return (f" Its slow part never reached the judge: the slow-driver test's p = "
+            f"{row['slow-driver test p']:.2g} is above the loop's level "
+            f"{res.config.alpha:g}, on a fitting segment where the die temperature settles as "
+            f"an exponential in time does; the loop keeps {kept} instead.")
 
 
 # -- README -----------------------------------------------------------------------------------

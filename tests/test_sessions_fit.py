@@ -52,3 +52,26 @@ def test_within_and_the_refusals():
         fit_sessions(FOSModel(max_lag=2), [], [])
     with pytest.raises(InputError, match="the sessions' channels differ: temp against hum"):
         fit_sessions(FOSModel(max_lag=2), ys[:2], [exogs[0], {"hum": exogs[1]["temp"]}])
+
+
+def test_a_level_models_session_constant_leaves_its_free_runs_still():
+    """A model whose level follows the output carries a session's turn-on bias in that level.
+
+    Its constant from a new session's first 600 samples must not drift its free runs: the
+    mean one-step residual there is mostly white noise, and a level held to sum to one
+    would turn it into a ramp over every outage.
+    """
+    rng = np.random.default_rng(3)
+
+    def session(bias, n=20_000):
+        return bias + np.cumsum(rng.normal(0, 0.002, n)) + rng.normal(0, 1.0, n)
+
+    ys = [session(b) for b in (0.0, 5.0, -3.0)]
+    model, _ = fit_sessions(FOSModel(max_lag=2, levels=[20, 60], rate=1.0), ys,
+                            [None] * 3, hold=True)
+    new = session(8.0)
+    shifted = model.shifted(session_constant(model, new, None, slice(0, 600)))
+    starts = np.arange(600, 18_000, 1800)
+    biases = (new[starts[:, None] + np.arange(1800)]
+              - shifted.free_runs(new, starts, 1800)).mean(axis=1)
+    assert np.sqrt(np.mean(biases**2)) < 0.4

@@ -99,3 +99,18 @@ def test_an_accelerometer_drives_a_gyro_in_its_fast_part_only():
     assert [f.evidence["channel"] for f in findings if f.test == "driver"] == ["temp_c"]
     assert [f.evidence["channel"] for f in findings if f.test == "aux"] == [
         "temp_c", "ax_g", "gy_dps"]  # the companion's correlation is cross-axis noise
+
+
+def test_a_sweep_under_a_flat_bias_instability_is_found_at_the_longer_scale():
+    """An accelerometer's 5e-4 m/s^2/C over a day's sweep, under a bias instability whose
+    Allan deviation is flat: at 200 blocks its increments are lost in the flicker's, at a
+    quarter as many the sweep has moved further than the flicker can."""
+    from data_synth import make_sessions
+
+    rec = make_sessions("temperature_sweep", seed=0)[0]
+    y, temp = rec.columns["ax_mps2"], rec.columns["temp_c"]
+    finding = _finding(y, temp)
+    assert finding.fired and finding.p_value < 1e-6
+    assert finding.evidence["block_s"] == 4 * block_samples([slice(0, len(y) // 2)], 1.0, 20.0)
+    weights = dict(finding.evidence["forms"])
+    assert weights[next(iter(weights))] == pytest.approx(5e-4, rel=0.2)

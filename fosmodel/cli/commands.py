@@ -159,8 +159,8 @@ def _sessions_meta(recs: list[Record], constants: list[float]) -> dict:
             "sessions": [{"source": rec.source, "constant": c}
                          for rec, c in zip(recs, constants)],
             "constant": "the model's constant is the mean session's; each session's own is its "
-                        "constant plus the session's, and a new session's is the mean one-step "
-                        "residual of the model over its first minutes "
+                        "constant plus the session's, and a new session's is the model's one-step "
+                        "residual over its first minutes with the output held at its mean "
                         "(fosmodel.models.sessions.session_constant)"}
 
 

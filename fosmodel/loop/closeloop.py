@@ -50,7 +50,7 @@ from .judge import MIN_WINDOWS, Judgement
 from .record import LoopRecord
 from .roles import Roles, channel_roles
 from .rounds import Rejected, run_round
-from .scores import Plan, Scores, plan, scores
+from .scores import BeforeAfter, Plan, Scores, plan, scores
 
 Progress = Callable[[str], None]
 #: Fewest windows of a horizon the prediction segment must hold for it to be reported (its
@@ -84,7 +84,7 @@ class Step:
 
 
 @dataclass
-class LoopResult:
+class LoopResult(BeforeAfter):
     """Everything the loop did.
 
     ``before_scores``/``after_scores`` are the prediction-segment errors of the starting
@@ -112,16 +112,6 @@ class LoopResult:
     residual_after: np.ndarray = field(repr=False)
     level_taus: tuple[float, ...] = ()
     notes: list[str] = field(default_factory=list)
-
-    @property
-    def before(self) -> dict[str, Any]:
-        """The starting model's prediction-segment numbers (:meth:`Scores.to_dict`)."""
-        return self.before_scores.to_dict()
-
-    @property
-    def after(self) -> dict[str, Any]:
-        """The final model's prediction-segment numbers."""
-        return self.after_scores.to_dict()
 
     @property
     def unexplained(self) -> list[str]:

@@ -17,16 +17,17 @@ from .record import LoopRecord
 from .scores import Plan
 
 
-class Fitter:
-    """Fits the FOS model of a candidate family on the fitting segment of one record.
+class FamilyArrays:
+    """What a candidate family's model reads besides the record: its target and its levels.
 
-    It also refits the weights of such a model on shorter pasts.  The levels of the
-    (compensated) output are computed once per compensation and passed with the inputs
-    (a model would recompute them at every prediction and free run).
+    The target is the output minus the family's compensation; the levels are those of the
+    target, restarted at each session's start as its derived columns are
+    (:class:`LoopRecord`).  Both are computed once per compensation and passed with the
+    inputs (a model would recompute the levels at every prediction and free run).
     """
 
-    def __init__(self, record: LoopRecord, train: slice, config: LoopConfig) -> None:
-        self.record, self.train, self.config = record, train, config
+    def __init__(self, record: LoopRecord, config: LoopConfig) -> None:
+        self.record, self.config = record, config
         self._targets: dict[tuple, np.ndarray] = {}
         self._levels: dict[tuple, np.ndarray] = {}
 
@@ -40,13 +41,36 @@ class Fitter:
 
     def inputs(self, family: CandidateFamily) -> dict[str, np.ndarray]:
         """Every array the family's model reads: its columns and the levels of its target."""
-        key = tuple(sorted(family.compensation.items()))
-        target = self.target(family)
+        key, target = tuple(sorted(family.compensation.items())), self.target(family)
         for tau in family.levels:
             if (tau, key) not in self._levels:
-                self._levels[tau, key] = level_series(target, tau, self.config.rate)
+                self._levels[tau, key] = self._level(target, tau)
         return {**family.arrays(),
                 **{level_name(tau): self._levels[tau, key] for tau in family.levels}}
+
+    def _level(self, target: np.ndarray, tau: float) -> np.ndarray:
+        sessions, rate = self.record.sessions, self.config.rate
+        if len(sessions) == 1:
+            return level_series(target, tau, rate)
+        return np.concatenate([level_series(target[s], tau, rate) for s in sessions])
+
+    def forget(self, keep: CandidateFamily) -> None:
+        """Drop what only other families read: their targets, levels and columns."""
+        key = tuple(sorted(keep.compensation.items()))
+        self._targets = {k: v for k, v in self._targets.items() if k in ((), key)}
+        self._levels = {k: v for k, v in self._levels.items() if k[1] in ((), key)}
+        self.record.forget(set(keep.arrays()))
+
+
+class Fitter(FamilyArrays):
+    """Fits the FOS model of a candidate family on the fitting segment of one record.
+
+    It also refits the weights of such a model on shorter pasts.
+    """
+
+    def __init__(self, record: LoopRecord, train: slice, config: LoopConfig) -> None:
+        super().__init__(record, config)
+        self.train = train
 
     def fit(self, family: CandidateFamily) -> BoundModel:
         """Fit the family's FOS model on the fitting segment."""
@@ -82,14 +106,6 @@ class Fitter:
         past = {k: v[:stop] for k, v in inputs.items()}
         return BoundModel(model.refit_weights(self.record.y[:stop], past, hold=_holds(family)),
                           inputs)
-
-    def forget(self, keep: CandidateFamily) -> None:
-        """Drop what only other families read: their columns and levels."""
-        key = tuple(sorted(keep.compensation.items()))
-        self._targets = {k: v for k, v in self._targets.items() if k in ((), key)}
-        self._levels = {k: v for k, v in self._levels.items() if k[1] in ((), key)}
-        self.record.forget(set(keep.arrays()))
-
 
 def _holds(family: CandidateFamily) -> bool:
     """Whether the family's levels are held (:meth:`FOSModel.refit_weights` with ``hold``).

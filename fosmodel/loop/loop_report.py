@@ -11,7 +11,7 @@ from ..io.output import save_figure, write_tables, write_text
 from ..typeset.markdown import markdown_table
 from .closeloop import REPORT_WINDOWS, LoopResult
 from .diagnose import Finding
-from .intervals import ratios
+from .intervals import Ratio, ratios
 from .judge import MIN_GAIN, MIN_HALF_WINDOWS, MIN_OUTAGE_GAIN, MIN_WINDOWS, Judgement
 from .loop_figure import finding_name, residual_figure
 
@@ -191,16 +191,25 @@ def _verdict_line(result: LoopResult) -> str:
     if not result.steps:
         return "No effect survived the evaluation: the final model is the starting model."
     found = result.ratios()
-    worse = [r.short() for r in found if r.verdict == "worse"]
-    better = [r.short() for r in found if r.verdict == "better"]
     unsure = [r.name for r in found if r.verdict == "undetermined"]
-    text = ("On the prediction segment, which chose nothing, the final model against the "
-            "starting one: " + ("better in " + "; ".join(better) + ". " if better else ""))
-    text += (f"It is WORSE there in: {'; '.join(worse)}. " if worse
-             else "Nothing there is worse beyond its interval. ")
+    text = better_or_worse("On the prediction segment, which chose nothing, the final model "
+                           "against the starting one: ", found,
+                           [r.short() for r in found if r.verdict == "worse"], " there")
     if unsure:
-        text += f"Too close or too few windows to tell: {', '.join(unsure)}."
-    return text.strip()
+        text += f" Too close or too few windows to tell: {', '.join(unsure)}."
+    return text
+
+
+def better_or_worse(lead: str, found: list[Ratio], worse: list[str], where: str = "",
+                    pooled: str = "") -> str:
+    """Return ``lead``, what is better beyond its interval, and what is worse or that nothing is.
+
+    ``where`` and ``pooled`` place the sentence (`` there``; ``, pooled``).
+    """
+    better = [r.short() for r in found if r.verdict == "better"]
+    return (lead + (f"better in {'; '.join(better)}. " if better else "")
+            + (f"It is WORSE{where} in: {'; '.join(worse)}." if worse
+               else f"Nothing{where} is worse beyond its interval{pooled}."))
 
 
 def still_firing(result: LoopResult) -> list[str]:

@@ -71,6 +71,27 @@ class Scores:
                 "terms": list(self.terms)}
 
 
+class BeforeAfter:
+    """A loop's result as numbers: its starting and its final model's scores, as JSON.
+
+    Mixed into :class:`fosmodel.loop.closeloop.LoopResult` and the sessions' result, whose
+    ``before_scores`` and ``after_scores`` they are.
+    """
+
+    before_scores: Scores
+    after_scores: Scores
+
+    @property
+    def before(self) -> dict[str, Any]:
+        """The starting model's numbers (:meth:`Scores.to_dict`)."""
+        return self.before_scores.to_dict()
+
+    @property
+    def after(self) -> dict[str, Any]:
+        """The final model's numbers."""
+        return self.after_scores.to_dict()
+
+
 @dataclass(frozen=True)
 class Plan:
     """Where a segment's numbers are taken: its windows per horizon, and why any is left out.

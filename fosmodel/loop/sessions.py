@@ -32,7 +32,7 @@ import numpy as np
 
 from ..core.derived import channels_read
 from ..core.exceptions import InputError
-from ..core.levels import level_name, level_series, levels_for
+from ..core.levels import levels_for
 from ..core.validation import as_channels, as_signal
 from ..models.bound import BoundModel
 from ..models.model import FOSModel
@@ -42,13 +42,13 @@ from .diagnose import Finding
 from .driver_forms import refit_forms, still
 from .effects import CandidateFamily, Effect, Offer, effects_from
 from .findings import Diagnostics
-from .fitting import _holds
+from .fitting import FamilyArrays, _holds
 from .intervals import Ratio, ratios
 from .judge import MIN_WINDOWS, Forecasts, Judgement, compare, forecasts, verdict
 from .record import LoopRecord
 from .roles import Roles, channel_roles
 from .rounds import Rejected, run_round
-from .scores import Outages, Plan, Scores, plan, scores
+from .scores import BeforeAfter, Outages, Plan, Scores, plan, scores
 
 Progress = Callable[[str], None]
 #: Fewest windows of a horizon a session's predicted part must hold for it to be reported.
@@ -64,7 +64,7 @@ class Session:
     name: str = ""
 
 
-class SessionFitter:
+class SessionFitter(FamilyArrays):
     """Fits a candidate family on the deciding parts of some sessions: shared weights.
 
     The levels of the (compensated) output restart at each session's start, as its
@@ -72,27 +72,8 @@ class SessionFitter:
     """
 
     def __init__(self, record: LoopRecord, decide: tuple[slice, ...], config: LoopConfig) -> None:
-        self.record, self.decide, self.config = record, decide, config
-        self._targets: dict[tuple, np.ndarray] = {}
-        self._levels: dict[tuple, np.ndarray] = {}
-
-    def target(self, family: CandidateFamily) -> np.ndarray:
-        """Return the output minus the family's compensation."""
-        key = tuple(sorted(family.compensation.items()))
-        if key not in self._targets:
-            comp = family.compensation_series()
-            self._targets[key] = self.record.y if comp is None else self.record.y - comp
-        return self._targets[key]
-
-    def inputs(self, family: CandidateFamily) -> dict[str, np.ndarray]:
-        """Return every array the family's model reads, its levels session by session."""
-        key, target = tuple(sorted(family.compensation.items())), self.target(family)
-        for tau in family.levels:
-            if (tau, key) not in self._levels:
-                self._levels[tau, key] = np.concatenate([
-                    level_series(target[s], tau, self.config.rate) for s in self.record.sessions])
-        return {**family.arrays(),
-                **{level_name(tau): self._levels[tau, key] for tau in family.levels}}
+        super().__init__(record, config)
+        self.decide = decide
 
     def fit(self, family: CandidateFamily, which: Sequence[int] | None = None) -> BoundModel:
         """Fit the family on the deciding parts of the sessions ``which`` (all by default).
@@ -138,14 +119,6 @@ class SessionFitter:
         window = _relative(self.decide[k], s) if window is None else window
         constant = session_constant(model.model, y, inputs, window)
         return BoundModel(model.model.shifted(constant), inputs)
-
-    def forget(self, keep: CandidateFamily) -> None:
-        """Drop what only other families read."""
-        key = tuple(sorted(keep.compensation.items()))
-        self._targets = {k: v for k, v in self._targets.items() if k in ((), key)}
-        self._levels = {k: v for k, v in self._levels.items() if k[1] in ((), key)}
-        self.record.forget(set(keep.arrays()))
-
 
 def _relative(part: slice, session: slice) -> slice:
     return slice(part.start - session.start, part.stop - session.start)
@@ -196,7 +169,7 @@ class SessionStep:
 
 
 @dataclass
-class SessionsResult:
+class SessionsResult(BeforeAfter):
     """Everything the loop did over several sessions.
 
     ``before``/``after`` are the starting and final model's predicted errors, pooled over
@@ -222,16 +195,6 @@ class SessionsResult:
     reported: list[Plan]
     level_taus: tuple[float, ...] = ()
     notes: list[str] = field(default_factory=list)
-
-    @property
-    def before(self) -> dict[str, Any]:
-        """The starting model's predicted numbers, pooled over the sessions."""
-        return self.before_scores.to_dict()
-
-    @property
-    def after(self) -> dict[str, Any]:
-        """The final model's predicted numbers, pooled over the sessions."""
-        return self.after_scores.to_dict()
 
     def ratios(self, session: int | None = None) -> list[Ratio]:
         """Return the final model's ratios to the starting one, pooled or of one session."""

@@ -13,7 +13,13 @@ from ..typeset.markdown import markdown_table
 from .intervals import Ratio
 from .judge import MIN_WINDOWS
 from .loop_figure import residual_figure
-from .loop_report import CONSOLE_WIDTH, evaluation_text, findings_table, still_firing
+from .loop_report import (
+    CONSOLE_WIDTH,
+    better_or_worse,
+    evaluation_text,
+    findings_table,
+    still_firing,
+)
 from .sessions import SessionsResult
 
 
@@ -78,12 +84,9 @@ def sessions_markdown(result: SessionsResult, title: str, table: pd.DataFrame,
 def _verdict(result: SessionsResult) -> str:
     if not result.steps:
         return "No effect survived the sessions held out: the final model is the starting one."
-    worse = result.worse()
-    better = [r.short() for r in result.ratios() if r.verdict == "better"]
-    return ("Pooled over the sessions' predicted parts, the final model against the starting "
-            "one: " + (f"better in {'; '.join(better)}. " if better else "")
-            + (f"It is WORSE in: {'; '.join(worse)}." if worse
-               else "Nothing is worse beyond its interval, pooled.")
+    return (better_or_worse("Pooled over the sessions' predicted parts, the final model "
+                            "against the starting one: ", result.ratios(), result.worse(),
+                            pooled=", pooled")
             + "".join(f" In {name} alone it is worse in: {'; '.join(result.worse_in(k))}."
                       for k, name in enumerate(result.names) if result.worse_in(k)))
 

@@ -665,9 +665,9 @@ class FOSModel(BaseEstimator):
         """Return a copy whose one-step predictions are ``offset`` higher (its constant moved).
 
         Another session of the same sensor differs by its own constant (its turn-on
-        bias): ``offset`` is the mean one-step residual of this model over a stretch of
-        it (:func:`fosmodel.models.sessions.session_constant`).  A free run's level moves
-        by ``offset`` over one minus the sum of the output's own weights.
+        bias): ``offset`` is this model's one-step residual there with the output held at
+        its mean (:func:`fosmodel.models.sessions.session_constant`).  A free run's level
+        moves by ``offset`` over one minus the sum of the output's own weights.
         """
         self._check_fitted()
         new = copy.copy(self)

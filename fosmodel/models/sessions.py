@@ -9,9 +9,10 @@ So the fit is the *within* estimator of panel data (Wooldridge 2010, sec. 10.5):
 every session's output and inputs lose their own means over its fitting part, and
 one least-squares fit (FOS) over all parts, each with its own lag window
 (:meth:`FOSModel.fit` with ``segments``), gives the shared weights.  Each
-session's constant is then the mean one-step residual of the shared model over
-its own fitting part: a constant added to a model's one-step prediction, which a
-free run carries to the session's own level (:meth:`FOSModel.shifted`).  A new
+session's constant is then the shift of the shared model's one-step prediction that
+puts it at the session's mean output over its own fitting part (every lag and level
+held at that mean; :func:`session_constant`), which a free run carries to the
+session's own level (:meth:`FOSModel.shifted`).  A new
 session's constant comes the same way from its first minutes, as a navigation
 filter learns a turn-on bias at alignment.
 
@@ -94,15 +95,31 @@ def fit_sessions(model: FOSModel, ys: Sequence[np.ndarray],
 
 def session_constant(model: FOSModel, y: np.ndarray, exog: Mapping[str, np.ndarray] | None,
                      window: slice) -> float:
-    """Return the mean one-step residual of ``model`` over ``window`` of a session's record.
+    """Return the shift that gives ``model`` a session's constant, from ``window`` of its record.
 
-    The shift (:meth:`FOSModel.shifted`) that gives the session its own constant; only the
-    samples up to the window's end are read.
+    The turn-on bias is an offset of the session's output: the shift (:meth:`FOSModel.shifted`)
+    that puts the model's one-step prediction at the session's mean output over ``window``
+    when every lag and level of the output is there too (its mean one-step residual with the
+    output held at that mean, the inputs and any compensation as measured).  For a stationary
+    model it is the offset times one minus the sum of the output's own weights; for a model
+    whose level follows the output (weights summing to one) it is only what undoes a drift
+    of the constant, since the level carries the session's bias itself.  The plain mean
+    one-step residual over a few minutes would be mostly their white noise, and a free run
+    of such a model turns any constant left in it into a ramp.  Only the samples up to the
+    window's end are read.
     """
     stop = window.stop
-    head = {k: np.asarray(v)[:stop] for k, v in exog.items()} if exog else None
-    prediction = np.asarray(model.predict(y[:stop], head), dtype=float)
-    residual = (y[:stop] - prediction)[window]
+    levels = set(model.candidate_spec().level_names)
+    head = {k: np.asarray(v)[:stop] for k, v in exog.items() if k not in levels} \
+        if exog else None
+    y = np.asarray(y[:stop], dtype=float)
+    comp = model._compensation(head, stop) if model.compensation else np.zeros(stop)
+    target = (y - comp)[window]
+    target = target[np.isfinite(target)]
+    if not target.size:
+        raise InputError(f"the window {window.start}-{window.stop} holds no sample")
+    held = comp + target.mean()  # the levels are then computed from it: flat too
+    residual = (held - np.asarray(model.predict(held, head or None), dtype=float))[window]
     residual = residual[np.isfinite(residual)]
     if not residual.size:
         raise InputError(f"the window {window.start}-{window.stop} holds no prediction past "
