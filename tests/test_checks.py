@@ -106,6 +106,7 @@ def test_the_command_refuses_a_record_that_moves_in_one_line(records, tmp_path, 
                    "static stretch (206-600 s)\n")
 
 
+@pytest.mark.slow
 def test_static_only_analyses_the_longest_static_stretch_and_says_which(records, tmp_path,
                                                                          capsys):
     paths, *_ = records
@@ -236,6 +237,7 @@ def test_every_column_not_analysed_is_named_with_why():
                                                        ("status", "not among columns=")]
 
 
+@pytest.mark.slow
 def test_imu_names_the_column_it_skips(records, tmp_path, capsys):
     paths, static, _ = records
     typo = tmp_path / "typo.csv"

@@ -76,6 +76,7 @@ print(json.dumps(out))
 """
 
 
+@pytest.mark.slow
 def test_bombs_are_refused_while_they_stream_within_a_gigabyte(bombs):
     names = ["zeros.csv.gz", "eight.csv.gz", "rows.csv.gz"]
     out = subprocess.run([sys.executable, "-c", _READ, *(str(bombs / n) for n in names)],

@@ -184,6 +184,7 @@ def record(columns, tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_the_command_writes_every_export_inflated(record, tmp_path, capsys):
     out = tmp_path / "noise"
     code = cli.main(["allan", str(record), "--rate", "100", "--columns", ",".join(TRUTH),

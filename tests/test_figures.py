@@ -284,6 +284,7 @@ def test_every_figure_of_a_study_reads(tmp_path, figure_log, capsys):
     assert {path: problems for path, problems in checked.items() if problems} == {}
 
 
+@pytest.mark.slow
 def test_every_figure_of_the_allan_commands_reads(tmp_path, figure_log, capsys):
     """``allan --column`` and ``allan --columns``: each axis's figure and each sensor's."""
     from fosmodel.cli import main

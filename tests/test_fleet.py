@@ -44,6 +44,7 @@ def here(files, tmp_path_factory):
     return store, run_fleet(files, store, CONFIG)
 
 
+@pytest.mark.slow
 def test_a_row_per_record_and_axis_and_a_folder_per_record(here):
     store, result = here
     axes = ["gx_dps", "gy_dps", "gz_dps", "ax_mps2", "ay_mps2", "az_mps2"]
@@ -84,6 +85,7 @@ def test_two_dask_workers_give_the_same_summary(here, files, tmp_path):
     assert sorted(result.ran) == NAMES
 
 
+@pytest.mark.slow
 def test_a_rerun_redoes_only_the_record_whose_marker_is_missing(here, files, tmp_path):
     shutil.copytree(here[0], tmp_path, dirs_exist_ok=True)  # copy2 keeps the times
     stamps = {n: (tmp_path / n / MARKER).stat().st_mtime_ns for n in NAMES}
@@ -99,6 +101,7 @@ def test_a_rerun_redoes_only_the_record_whose_marker_is_missing(here, files, tmp
                                                "B fitted", "K fitted"]
 
 
+@pytest.mark.slow
 def test_a_failed_record_is_named_after_the_others_are_stored(files, tmp_path):
     bad = tmp_path / "imu9.csv"
     bad.write_text("gx_dps,ax_mps2\n0.1,oops\n")

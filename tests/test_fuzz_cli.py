@@ -421,6 +421,7 @@ def _write_case(case: tuple, work: Path) -> tuple[Path, str | None]:
     return path, expected
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", CASES, ids=[case[0] for case in CASES])
 def test_every_command_refuses_a_malformed_record(case, work, capsys):
     path, expected = _write_case(case, work)

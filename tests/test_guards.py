@@ -253,6 +253,7 @@ def _interrupted_commands(folder):
     }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["fit", "predict", "study", "close-loop", "allan", "synth",
                                      "demo"])
 def test_an_interrupted_command_exits_130_and_writes_nothing(folder, capsys, monkeypatch,
@@ -315,6 +316,7 @@ def _failing_at(name, error):
     return fsync
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", sorted(_LAST))
 def test_a_full_disk_or_ctrl_c_at_the_last_output_undoes_the_first(folder, capsys, monkeypatch,
                                                                    command):
@@ -410,6 +412,7 @@ def _in_a_mount(tmp_path, options):
     return prefix, mnt
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("options, said", [
     ("size=64k", "No space left on device"),
     ("ro", "is on a read-only file system"),

@@ -92,6 +92,7 @@ def test_one_axis_is_refused(record):
     assert str(err.value) == "a joint noise model needs at least two axes"
 
 
+@pytest.mark.slow
 def test_the_allan_command_writes_the_joint_model(record, tmp_path, capsys):
     path = tmp_path / "imu.csv"
     pd.DataFrame({c: v[:100_000] for c, v in record.items()}).to_csv(path, index=False,

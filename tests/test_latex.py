@@ -234,7 +234,12 @@ EXPECTED = {"special": {"special"}, "study": {"comparison", "study", "best", "le
             "workflow": {"noise", "study", "loop", "timing"}, "summary": {"summary"}}
 
 
-@pytest.fixture(scope="module", params=sorted(WRITERS))
+# the commands that run whole studies or analyses to write their tables are the long ones
+_LONG = {"imu", "studies", "workflow"}
+
+
+@pytest.fixture(scope="module", params=[pytest.param(name, marks=pytest.mark.slow)
+                                        if name in _LONG else name for name in sorted(WRITERS)])
 def tex_files(request, tmp_path_factory) -> list[Path]:
     out = tmp_path_factory.mktemp(request.param)
     files = WRITERS[request.param](out)

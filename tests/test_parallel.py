@@ -43,6 +43,7 @@ if __name__ == "__main__":
 """
 
 
+@pytest.mark.slow
 def test_a_worker_that_grows_is_kept_not_retired(tmp_path):
     # loky retires a worker 300 MB above its size after its first call, and a call given to
     # a worker retired so could wait for ever; run apart, so that a wait fails the test
