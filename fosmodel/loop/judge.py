@@ -260,7 +260,7 @@ class Judgement:
 
     def gains(self, key: str) -> list[float | None]:
         """Return the gains on ``key`` from each origin, the earliest first, the end last."""
-        earlier = [None if cs is None else next(c.gain for c in cs if c.key == key)
+        earlier = [None if cs is None else next((c.gain for c in cs if c.key == key), None)
                    for cs in (self.earlier or ())]
         return [*earlier, self.at(key).gain]
 
@@ -304,7 +304,7 @@ def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]],
     for c in last:
         if not c.passes(alpha, strict):
             continue
-        gains = [next(e.gain for e in cs if e.key == c.key) for cs in earlier]
+        gains = [e.gain for cs in earlier for e in cs if e.key == c.key]
         if strict and any(g < -GAIN_TOL for g in gains):
             continue
         mean = float(np.mean([*gains, c.gain]))
