@@ -238,8 +238,10 @@ class Judgement:
     each earlier origin (None where the trial's new terms cannot be estimated there; the
     whole None when they were not looked at: the trial failed at the end); ``kept_on`` is
     the key of the comparison it is kept on (None: rejected), ``reason`` why not when the
-    loop held an accepted trial back.  Over several sessions ``last`` pools every
-    held-out session's comparisons and ``sessions`` holds each one's.
+    loop held an accepted trial back.  ``beyond`` are the comparisons at horizons the
+    evaluation segment holds too few windows of, from the earliest origin on (where that
+    stretch holds enough; :class:`fosmodel.loop.fitting.Judge`).  Over several sessions
+    ``last`` pools every held-out session's comparisons and ``sessions`` holds each one's.
     """
 
     last: tuple[Comparison, ...]
@@ -248,6 +250,7 @@ class Judgement:
     kept_on: str | None
     reason: str | None = None
     sessions: tuple[tuple[Comparison, ...], ...] | None = None
+    beyond: tuple[Comparison, ...] = ()
 
     @property
     def accepted(self) -> bool:
@@ -281,6 +284,7 @@ class Judgement:
                 "gains_from_origins": None if self.earlier is None else
                 {c.key: self.gains(c.key) for c in self.last},
                 "kept_on": self.kept_on, "accepted": self.accepted, "reason": self.reason,
+                "beyond_evaluation": {c.key: c.to_dict() for c in self.beyond},
                 **({} if self.sessions is None else {"sessions": [
                     {c.key: c.to_dict() for c in each} for each in self.sessions]})}
 
