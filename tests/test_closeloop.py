@@ -225,3 +225,18 @@ def test_a_rejected_candidate_keeps_no_columns_into_the_next_diagnosis(monkeypat
     res = _run("slow_steps", 0)[-1]
     assert len(checked) >= 2 and checked[-1] > 0  # a diagnosis after columns were tried
     assert any(r.effect.kind in ("drift", "step") for r in res.rejected)
+
+
+def test_a_horizon_the_evaluation_segment_cannot_hold_is_judged_from_the_earliest_origin():
+    # 10000 s at 1 Hz: the evaluation segment (2000 s) holds six 300 s windows, too few to
+    # judge; from the earliest origin (2500 s) to its end the refits have 4500 s unseen
+    rng = np.random.default_rng(1)
+    y = np.cumsum(0.002 * rng.standard_normal(10000)) + 0.05 * rng.standard_normal(10000)
+    res = close_loop(y, None, LoopConfig(rate=1.0))
+    assert 300.0 in res.judged.skipped and 300.0 not in res.judged.horizons
+    (step,) = res.steps
+    assert step.effect.kind == "level"
+    (beyond,) = step.judgement.beyond  # the level holds a random walk's bias: it gains there
+    assert beyond.key == "outage_300s" and beyond.groups == 15
+    assert beyond.gain > 0.5 and not beyond.loses(res.config.accept_alpha)
+    assert set(step.judgement.to_dict()["beyond_evaluation"]) == {"outage_300s"}

@@ -10,7 +10,18 @@ from fosmodel import cli
 from fosmodel.core.exceptions import InputError
 from fosmodel.core.levels import level_series
 from fosmodel.loop.closeloop import LoopConfig, close_loop
-from fosmodel.loop.sessions import Session, close_sessions
+from fosmodel.loop.effects import CandidateFamily, make
+from fosmodel.loop.judge import verdict
+from fosmodel.loop.sessions import (
+    Session,
+    SessionFitter,
+    SessionJudge,
+    _ahead,
+    _parts,
+    _record,
+    close_sessions,
+    score_sessions,
+)
 
 HOURS = 12
 
@@ -131,3 +142,42 @@ def test_close_loop_and_fit_of_several_files(sweeps, tmp_path, capsys):
     meta = json.loads(fitted.read_text())["meta"]
     assert len(meta["sessions"]) == 3 and "first minutes" in meta["constant"]
     assert level_series  # the module's levels are those of each session (see the fitter)
+
+
+def _drift_judged(shape):
+    """A drift judged over three sessions sharing ``shape`` (of the fraction of a session)."""
+    rng = np.random.default_rng(4)
+    n = 20000
+    sessions = [Session(c + shape(np.arange(n) / n) + 0.05 * rng.standard_normal(n), None,
+                        f"s{k + 1}") for k, c in enumerate((0.3, -0.2, 0.1))]
+    config = LoopConfig(rate=1.0, horizons_s=(30.0, 300.0))
+    record, _ = _record(sessions, config)
+    head = round(config.head_s * config.rate)
+    decide, _, judged, _ = _parts(record, config, head)
+    fitter = SessionFitter(record, decide, config)
+    family = CandidateFamily(config.max_lag).add(make("level", taus=(10.0, 30.0)), record)
+    drift = make("drift", form="trend", tau_s=5000.0)
+    trial = family.add(drift, record)
+    judge = SessionJudge(fitter, family, judged, head, _ahead(record, config, judged, head))
+    judgement = judge(fitter.fit(trial), trial, drift)
+    level = make("level", taus=(10.0, 30.0))
+    alone, with_drift = (score_sessions(sessions, config, e) for e in ([level], [level, drift]))
+    return judgement, config, alone["bias_rms"]["300"], with_drift["bias_rms"]["300"]
+
+
+def test_a_drift_shared_by_the_deciding_hours_is_judged_ahead_in_time():
+    # a rise over each session's first half that turns there: held out across sessions the
+    # drift is judged on the hours it was fitted on (it passes), on the predicted part it
+    # runs on and is worse; judged ahead of a fit on the first halves it loses, refused
+    judgement, config, alone, with_drift = _drift_judged(lambda u: -2 * np.abs(u - 0.5))
+    assert verdict(judgement.last, list(judgement.sessions), config.accept_alpha) is not None
+    assert with_drift > 1.3 * alone
+    assert not judgement.accepted
+    assert len(judgement.earlier) == 3 and judgement.origins_s == (10000.0,) * 3
+    assert all(g < 0 for g in judgement.gains("outage_300s")[:-1])
+
+
+def test_a_drift_that_runs_on_is_kept_ahead_in_time():
+    judgement, _, alone, with_drift = _drift_judged(lambda u: 0.5 * u)
+    assert judgement.accepted and with_drift < 0.5 * alone
+    assert all(g > 0 for g in judgement.gains(judgement.kept_on)[:-1])

@@ -14,7 +14,7 @@ from .driver_forms import refit_forms
 from .effects import CandidateFamily, Effect
 from .judge import Forecasts, Judgement, compare, forecasts, verdict
 from .record import LoopRecord
-from .scores import Plan
+from .scores import Plan, plan
 
 
 class FamilyArrays:
@@ -137,6 +137,26 @@ class Judge:
             self.origins = self.origins[-1:]  # too short a past to refit on
         self.refits = [self._refit(current, family, o) for o in self.origins]
         self.current = [self._forecasts(m) for m in self.refits]
+        self.beyond = self._beyond_plan(where)
+        self.beyond_current = self._beyond(self.refits[0]) if self.beyond else None
+
+    def _beyond_plan(self, where: Plan) -> Plan | None:
+        """Return where the earliest origin judges what the evaluation segment holds too few of.
+
+        Unseen by the refits at that origin, the stretch from it to the evaluation segment's
+        end may hold enough of them to judge: a horizon is not passed unjudged where it can
+        be judged there.
+        """
+        if len(self.origins) < 2 or not where.skipped:
+            return None
+        beyond = plan(slice(int(self.origins[0]), where.segment.stop), tuple(where.skipped),
+                      self.fitter.config.rate, self.fitter.config.n_starts,
+                      "earliest origin's unseen")
+        return beyond if beyond.horizons else None
+
+    def _beyond(self, model: BoundModel) -> Forecasts:
+        assert self.beyond is not None
+        return forecasts(model, self.y, self.beyond.segment, self.beyond.horizons)
 
     @property
     def origins_s(self) -> tuple[float, ...]:
@@ -172,4 +192,15 @@ class Judge:
         found = [self._earlier(trial, family, o, m, f) for o, m, f in
                  zip(self.origins[:-1], self.refits[:-1], self.current[:-1])]
         kept = verdict(last, [f for f in found if f is not None], alpha, effect.strict)
-        return Judgement(last, self.origins_s, tuple(found), kept)
+        if kept is None or self.beyond is None or self.beyond_current is None:
+            return Judgement(last, self.origins_s, tuple(found), kept)
+        refit = self._refit(trial, family, int(self.origins[0]))
+        beyond = compare(self.beyond_current, self._beyond(refit))[1:]  # the one-step is judged
+        lost = [c.label for c in beyond if c.loses(alpha)]
+        judgement = Judgement(last, self.origins_s, tuple(found), kept, beyond=beyond)
+        if lost:
+            return judgement.held_back(
+                f"loses beyond noise on the {', '.join(lost)}, which the evaluation segment "
+                f"holds too few windows of, judged from the earliest origin "
+                f"({self.origins_s[0]:g} s) on")
+        return judgement

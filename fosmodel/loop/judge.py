@@ -238,8 +238,10 @@ class Judgement:
     each earlier origin (None where the trial's new terms cannot be estimated there; the
     whole None when they were not looked at: the trial failed at the end); ``kept_on`` is
     the key of the comparison it is kept on (None: rejected), ``reason`` why not when the
-    loop held an accepted trial back.  Over several sessions ``last`` pools every
-    held-out session's comparisons and ``sessions`` holds each one's.
+    loop held an accepted trial back.  ``beyond`` are the comparisons at horizons the
+    evaluation segment holds too few windows of, from the earliest origin on (where that
+    stretch holds enough; :class:`fosmodel.loop.fitting.Judge`).  Over several sessions
+    ``last`` pools every held-out session's comparisons and ``sessions`` holds each one's.
     """
 
     last: tuple[Comparison, ...]
@@ -248,6 +250,7 @@ class Judgement:
     kept_on: str | None
     reason: str | None = None
     sessions: tuple[tuple[Comparison, ...], ...] | None = None
+    beyond: tuple[Comparison, ...] = ()
 
     @property
     def accepted(self) -> bool:
@@ -260,7 +263,7 @@ class Judgement:
 
     def gains(self, key: str) -> list[float | None]:
         """Return the gains on ``key`` from each origin, the earliest first, the end last."""
-        earlier = [None if cs is None else next(c.gain for c in cs if c.key == key)
+        earlier = [None if cs is None else next((c.gain for c in cs if c.key == key), None)
                    for cs in (self.earlier or ())]
         return [*earlier, self.at(key).gain]
 
@@ -281,6 +284,7 @@ class Judgement:
                 "gains_from_origins": None if self.earlier is None else
                 {c.key: self.gains(c.key) for c in self.last},
                 "kept_on": self.kept_on, "accepted": self.accepted, "reason": self.reason,
+                "beyond_evaluation": {c.key: c.to_dict() for c in self.beyond},
                 **({} if self.sessions is None else {"sessions": [
                     {c.key: c.to_dict() for c in each} for each in self.sessions]})}
 
@@ -304,7 +308,7 @@ def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]],
     for c in last:
         if not c.passes(alpha, strict):
             continue
-        gains = [next(e.gain for e in cs if e.key == c.key) for cs in earlier]
+        gains = [e.gain for cs in earlier for e in cs if e.key == c.key]
         if strict and any(g < -GAIN_TOL for g in gains):
             continue
         mean = float(np.mean([*gains, c.gain]))

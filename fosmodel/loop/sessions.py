@@ -16,7 +16,16 @@ is judged.  The comparisons of every held-out session are pooled (their batches
 and outage windows together) into one verdict, and each held-out session plays
 the part an earlier origin plays on a single record (:func:`fosmodel.loop.judge.
 verdict`): a strict effect must lose nothing on any of them, the others must gain
-on average.  A line's
+on average.
+
+Held out across sessions is not held out in time: a function of time since each
+session's start (a drift), fitted on the others' deciding hours, is judged on the
+held-out session's same hours, where it interpolates; on the predicted hours it
+runs on beyond them.  So a strict effect is also judged *ahead*: both models are
+fitted on the others up to the fitting fraction (``train``) of each and judged on
+the held-out session from there to the end of its deciding part, further in time
+than either saw.  There too it must lose nothing on what it passes, and nothing
+beyond noise pooled.  A line's
 phase and a step's time belong to one record: only the kinds several sessions
 may share are offered (``pooled``).
 """
@@ -124,28 +133,69 @@ def _relative(part: slice, session: slice) -> slice:
     return slice(part.start - session.start, part.stop - session.start)
 
 
+@dataclass(frozen=True)
+class Ahead:
+    """Where a strict effect is judged ahead in time.
+
+    ``fitter`` fits on each session's first ``train`` of it, ``plans`` judge each session
+    from there to its deciding part's end.
+    """
+
+    fitter: SessionFitter
+    plans: list[Plan]
+
+    @property
+    def origins_s(self) -> tuple[float, ...]:
+        """Each session's origin, in seconds from its start."""
+        rec = self.fitter.record
+        return tuple((d.stop - s.start) / self.fitter.config.rate
+                     for d, s in zip(self.fitter.decide, rec.sessions))
+
+
 class SessionJudge:
     """Judges a trial leave-one-session-out against the current family (module docstring)."""
 
     def __init__(self, fitter: SessionFitter, family: CandidateFamily, plans: list[Plan],
-                 head: int) -> None:
-        self.fitter, self.plans, self.head = fitter, plans, head
-        self.current = [self._forecasts(family, k) for k in range(len(plans))]
+                 head: int, ahead: Ahead | None = None) -> None:
+        self.fitter, self.plans, self.head, self.ahead = fitter, plans, head, ahead
+        self.family = family
+        self.current = [self._forecasts(fitter, plans, family, k) for k in range(len(plans))]
+        self._current_ahead: list[Forecasts] | None = None
 
-    def _forecasts(self, family: CandidateFamily, k: int) -> Forecasts:
-        others = [j for j in range(len(self.plans)) if j != k]
-        fitted = self.fitter.fit(self.fitter.refitted(family, others), others)
-        bound = self.fitter.session(fitted, k, slice(0, self.head))
-        y = self.fitter.record.y[self.fitter.record.sessions[k]]
-        return forecasts(bound, y, self.plans[k].segment, self.plans[k].horizons)
+    def _forecasts(self, fitter: SessionFitter, plans: list[Plan], family: CandidateFamily,
+                   k: int) -> Forecasts:
+        others = [j for j in range(len(plans)) if j != k]
+        fitted = fitter.fit(fitter.refitted(family, others), others)
+        bound = fitter.session(fitted, k, slice(0, self.head))
+        y = fitter.record.y[fitter.record.sessions[k]]
+        return forecasts(bound, y, plans[k].segment, plans[k].horizons)
+
+    def _ahead(self, family: CandidateFamily) -> list[Forecasts]:
+        assert self.ahead is not None
+        return [self._forecasts(self.ahead.fitter, self.ahead.plans, family, k)
+                for k in range(len(self.ahead.plans))]
 
     def __call__(self, trial: BoundModel, family: CandidateFamily, effect: Effect) -> Judgement:
-        """Judge the trial's family on each held-out session, and on them all pooled."""
-        found = [self._forecasts(family, k) for k in range(len(self.plans))]
+        """Judge the trial's family on each held-out session, and on them all pooled.
+
+        A strict effect that passes is then judged ahead in time (the module docstring).
+        """
+        alpha = self.fitter.config.accept_alpha
+        found = [self._forecasts(self.fitter, self.plans, family, k)
+                 for k in range(len(self.plans))]
         each = tuple(compare(a, b) for a, b in zip(self.current, found))
         pooled = compare(_pool(self.current), _pool(found))
-        kept = verdict(pooled, list(each), self.fitter.config.accept_alpha, effect.strict)
-        return Judgement(pooled, (), None, kept, sessions=each)
+        kept = verdict(pooled, list(each), alpha, effect.strict)
+        if kept is None or not effect.strict or self.ahead is None:
+            return Judgement(pooled, (), None, kept, sessions=each)
+        if self._current_ahead is None:
+            self._current_ahead = self._ahead(self.family)
+        later = self._ahead(family)
+        ahead = tuple(compare(a, b) for a, b in zip(self._current_ahead, later))
+        kept = verdict(pooled, [*each, *ahead], alpha, effect.strict)
+        if any(c.loses(alpha) for c in compare(_pool(self._current_ahead), _pool(later))):
+            kept = None
+        return Judgement(pooled, self.ahead.origins_s, ahead, kept, sessions=each)
 
 
 def _pool(parts: list[Forecasts]) -> Forecasts:
@@ -263,6 +313,7 @@ def close_sessions(sessions: Sequence[Session], config: LoopConfig,
     head = round(config.head_s * config.rate)
     decide, predict, judged, reported = _parts(record, config, head)
     fitter = SessionFitter(record, decide, config)
+    ahead = _ahead(record, config, judged, head)
     taus = config.level_taus if config.level_taus is not None else levels_for(
         np.concatenate([record.y[p] for p in decide]), config.rate)
     family = CandidateFamily(config.max_lag)
@@ -295,7 +346,8 @@ def close_sessions(sessions: Sequence[Session], config: LoopConfig,
             break
         say(f"round {len(steps) + 1}: {len(candidates)} effect(s) to try, each judged on "
             f"every session held out")
-        chosen, refused, waiting = run_round(fitter, SessionJudge(fitter, family, judged, head),
+        judge = SessionJudge(fitter, family, judged, head, ahead)
+        chosen, refused, waiting = run_round(fitter, judge,
                                              family, candidates, record, say, len(steps) + 1)
         rejected += refused
         if chosen is None or chosen.family is None or chosen.model is None:
@@ -308,6 +360,7 @@ def close_sessions(sessions: Sequence[Session], config: LoopConfig,
         added.append(chosen.effect)
         current, family = chosen.model, chosen.family
         fitter.forget(family)
+        ahead.fitter.forget(family)
         say(f"kept {chosen.effect.describe()}")
         findings = findings_of(current, family)
     before = _scores(fitter, base, reported, config)
@@ -387,6 +440,21 @@ def _parts(record: LoopRecord, config: LoopConfig, head: int) -> tuple:
                 p.skipped[h] = (f"the sessions hold {count} {h:g} s windows to judge, fewer "
                                 f"than {MIN_WINDOWS}")
     return tuple(decide), predict, judged, reported
+
+
+def _ahead(record: LoopRecord, config: LoopConfig, judged: list[Plan], head: int) -> Ahead:
+    """Return the fitter on each session's first ``train`` of it, and the plans from there.
+
+    The horizons are those judged over the sessions, each where the session's part ahead
+    holds a window of it.
+    """
+    fit, plans = [], []
+    for s, p, name in zip(record.sessions, judged, record.names):
+        origin = max(head, round(config.train * (s.stop - s.start)))
+        fit.append(slice(s.start, s.start + origin))
+        plans.append(plan(slice(origin, p.segment.stop), tuple(p.horizons), config.rate,
+                          config.n_starts, f"{name} ahead", 1))
+    return Ahead(SessionFitter(record, tuple(fit), config), plans)
 
 
 def _scores(fitter: SessionFitter, model: BoundModel, reported: list[Plan],

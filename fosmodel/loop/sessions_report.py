@@ -53,7 +53,11 @@ def sessions_markdown(result: SessionsResult, title: str, table: pd.DataFrame,
         "the within fit of panel data). Each candidate is fitted on all but one session and "
         f"judged on that one, after its first {cfg.head_s:g} s, which give it its own constant "
         "as an alignment would; every session held out in turn, the comparisons pooled "
-        f"(horizons with at least {MIN_WINDOWS} windows over the sessions). Channels: "
+        f"(horizons with at least {MIN_WINDOWS} windows over the sessions). A function of "
+        "time, and any effect judged strictly, is also judged ahead: fitted on the first "
+        f"{cfg.train:.0%} of the other sessions, judged on the held-out one from there to the "
+        "end of its deciding part (the gains 'from earlier origins', one per session). "
+        "Channels: "
         f"{result.roles.describe()}.", "", _verdict(result), "",
         "## Each session's predicted part, and all of them pooled", "",
         markdown_table(table, digits=4), "",
