@@ -14,6 +14,7 @@ from .diagnose import Finding
 from .intervals import Ratio, ratios
 from .judge import MIN_GAIN, MIN_HALF_WINDOWS, MIN_OUTAGE_GAIN, MIN_WINDOWS, Judgement
 from .loop_figure import finding_name, residual_figure
+from .rounds import Rejected
 
 __all__ = ["CONSOLE_WIDTH", "console_summary", "describe_finding", "effects_table",
            "evaluation_text", "findings_table", "ratios_table", "report_markdown",
@@ -111,12 +112,7 @@ def report_markdown(result: LoopResult, title: str, effects: pd.DataFrame,
         lines += ["## Cross-axis noise", "", _cross_axis_text(result), ""]
     lines += ["## Diagnostics of the first and the final model", "",
               markdown_table(diagnostics, digits=3), ""]
-    if result.rejected:
-        lines += ["## Candidates that did not go in", ""]
-        lines += [f"- round {r.round}, {r.effect.describe()}: {evaluation_text(r.judgement)}"
-                  + (f"; {r.judgement.reason}" if r.judgement.reason else "")
-                  for r in result.rejected]
-        lines.append("")
+    lines += rejected_section(result.rejected)
     if result.unexplained:
         lines += [f"Still firing at the end, with no effect that survives: "
                   f"{', '.join(still_firing(result))}.", ""]
@@ -180,6 +176,19 @@ def evaluation_text(judgement: Judgement) -> str:
                                                      for g in earlier)
         parts.append(text + ")")
     return ", ".join(parts)
+
+
+def rejected_section(rejected: list[Rejected]) -> list[str]:
+    """Return the report's lines on the candidates that did not go in (none if there were none).
+
+    Each with its round, its evaluation and, where the loop held an accepted one back, why.
+    """
+    if not rejected:
+        return []
+    return ["## Candidates that did not go in", "",
+            *(f"- round {r.round}, {r.effect.describe()}: {evaluation_text(r.judgement)}"
+              + (f"; {r.judgement.reason}" if r.judgement.reason else "") for r in rejected),
+            ""]
 
 
 def _origins(result: LoopResult) -> list[float]:

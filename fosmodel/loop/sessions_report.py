@@ -18,6 +18,7 @@ from .loop_report import (
     better_or_worse,
     evaluation_text,
     findings_table,
+    rejected_section,
     still_firing,
 )
 from .sessions import SessionsResult
@@ -68,12 +69,7 @@ def sessions_markdown(result: SessionsResult, title: str, table: pd.DataFrame,
     lines += [f"- {s.effect.describe()} ({', '.join(s.terms_added) or 'a compensation'}): "
               f"{evaluation_text(s.judgement)}" for s in result.steps] or ["- none"]
     lines.append("")
-    if result.rejected:
-        lines += ["## Candidates that did not go in", ""]
-        lines += [f"- round {r.round}, {r.effect.describe()}: {evaluation_text(r.judgement)}"
-                  + (f"; {r.judgement.reason}" if r.judgement.reason else "")
-                  for r in result.rejected]
-        lines.append("")
+    lines += rejected_section(result.rejected)
     lines += ["## Diagnostics of the first and the final model", "",
               markdown_table(diagnostics, digits=3), ""]
     firing = still_firing(result)  # type: ignore[arg-type]
