@@ -15,6 +15,7 @@ import importlib
 import json
 import sys
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -32,6 +33,8 @@ from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
 from .flags import with_flags
 
 if TYPE_CHECKING:
+    from ..loop.closeloop import LoopResult
+    from ..loop.sessions import SessionsResult
     from ..models.model import FOSModel
 
 
@@ -262,7 +265,6 @@ LOOP_FLAGS = {"horizons_s": "--horizons", "train": "--split", "evaluate": "--spl
 
 
 def close_loop(args: argparse.Namespace) -> int:
-    from ..io.model_file import write_model
     from ..loop.closeloop import LoopConfig
     from ..loop.closeloop import close_loop as run_loop
     from ..loop.loop_report import CONSOLE_WIDTH, console_summary, write_loop_report
@@ -302,19 +304,34 @@ def close_loop(args: argparse.Namespace) -> int:
         return _close_sessions(args, recs, channels, config, say, title, out, json_path,
                                model_path)
     result = run_loop(rec.column(args.column), channels[0], config, progress=say)
+    meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
+            "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment"}
+    return _loop_outputs(args, result, lambda tmp: write_loop_report(result, tmp, title),
+                         console_summary(result), meta, out, json_path, model_path,
+                         ("residual loop report", "final model"))
+
+
+def _loop_outputs(args: argparse.Namespace, result: LoopResult | SessionsResult,
+                  write_report: Callable[[Path], object], console: str, meta: dict,
+                  out: Path, json_path: Path | None, model_path: Path | None,
+                  names: tuple[str, str]) -> int:
+    """Write a loop's report, model and JSON, and say where: one record's or the sessions'.
+
+    ``names`` are what the last line calls the report and the model.
+    """
+    from ..io.model_file import write_model
+
     with report_directory(out, args.files) as tmp:
-        write_loop_report(result, tmp, title)
+        write_report(tmp)
     if model_path:
-        meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
-                "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment",
-                "effects": [step.effect.describe() for step in result.steps]}
+        meta = {**meta, "effects": [step.effect.describe() for step in result.steps]}
         write_model(model_path, result.final_model.model, meta)
-    print(console_summary(result))
+    print(console)
     if json_path:
         write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
-    print(f"residual loop report written to {out.resolve()}/"
+    print(f"{names[0]} written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else "")
-          + (f"; final model written to {model_path}" if model_path else ""))
+          + (f"; {names[1]} written to {model_path}" if model_path else ""))
     return 0
 
 
@@ -322,7 +339,6 @@ def _close_sessions(args: argparse.Namespace, recs: list[Record], channels: list
                     config: object, say: object, title: str, out: Path,
                     json_path: Path | None, model_path: Path | None) -> int:
     """``close-loop A B C``: the loop over sessions, its report, JSON and shared model."""
-    from ..io.model_file import write_model
     from ..loop.sessions import Session, close_sessions
     from ..loop.sessions_report import sessions_console, write_sessions_report
 
@@ -333,21 +349,12 @@ def _close_sessions(args: argparse.Namespace, recs: list[Record], channels: list
     sessions = [Session(r.column(args.column), ch, Path(f).stem)
                 for r, ch, f in zip(recs, channels, args.files)]
     result = close_sessions(sessions, config, progress=say)  # type: ignore[arg-type]
-    with report_directory(out, args.files) as tmp:
-        write_sessions_report(result, tmp, title)
-    if model_path:
-        meta = {"column": args.column, "rate_hz": recs[0].rate,
-                "fitted_on": "close-loop deciding parts of every session",
-                "effects": [step.effect.describe() for step in result.steps],
-                **_sessions_meta(recs, result.constants)}
-        write_model(model_path, result.final_model.model, meta)
-    print(sessions_console(result))
-    if json_path:
-        write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
-    print(f"residual loop report of {len(recs)} sessions written to {out.resolve()}/"
-          + (f" and {json_path}" if json_path else "")
-          + (f"; shared model written to {model_path}" if model_path else ""))
-    return 0
+    meta = {"column": args.column, "rate_hz": recs[0].rate,
+            "fitted_on": "close-loop deciding parts of every session",
+            **_sessions_meta(recs, result.constants)}
+    return _loop_outputs(args, result, lambda tmp: write_sessions_report(result, tmp, title),
+                         sessions_console(result), meta, out, json_path, model_path,
+                         (f"residual loop report of {len(recs)} sessions", "shared model"))
 
 
 def _sensor_of(rec: Record, column: str) -> str | None:
