@@ -65,7 +65,9 @@ The figure of Table 1 goes to ``results/fos_speed.png`` and ``docs/pages/figures
 After Table 1 it times the parts of the CP = 2, 10-term fit on 36,000 samples: the first
 batch of correlations, every Gram column, the search, and the rest of the fit; then the
 same moments as BLAS products of the lag matrix (every cubic moment in one product, the
-Gram column of each selected cross-product in one more), checked equal to the tables'.
+Gram column of each selected cross-product in one more), checked equal to the tables';
+then where the wall time of the CP = 1 fit goes that its CPU time does not (context
+switches and page faults of the timing thread).
 
 Run: ``python benchmarks/bench_fos_speed.py [--repeats R] [--quick] [--small]``
 """
@@ -73,7 +75,10 @@ Run: ``python benchmarks/bench_fos_speed.py [--repeats R] [--quick] [--small]``
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import shutil
+import time
 import warnings
 from functools import partial
 from pathlib import Path
@@ -299,6 +304,48 @@ def blas_alternatives(repeats: int) -> None:
           f"two agree to {worst:.1e} of the largest moment")
 
 
+def waiting(repeats: int) -> None:
+    """Where the wall time of the CP = 1, 10-term fit goes that its CPU time does not.
+
+    Loops of consecutive calls (at least 20 ms each, interleaved with Burg's), with the
+    thread's context switches and page faults from ``getrusage``: a call that waits for
+    a core shows involuntary switches, one that waits for anything else voluntary ones.
+    """
+    if not hasattr(resource, "RUSAGE_THREAD"):  # Linux only
+        return
+    signal = ar3_signal(N)
+    model = FOSModel(max_lag=10, degree=1, stop="max_terms", max_terms=10)
+    fns = {"FOS CP 1": partial(model.fit, signal), "Burg": partial(burg, signal, 10)}
+    number = {name: max(1, int(0.02 / _cpu_per_call(fn))) for name, fn in fns.items()}
+    totals = {name: np.zeros(6) for name in fns}  # calls, wall, cpu, involuntary, voluntary, faults
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            r0, t0, c0 = resource.getrusage(resource.RUSAGE_THREAD), time.perf_counter(), \
+                time.thread_time()
+            for _ in range(number[name]):
+                fn()
+            t1, c1 = time.perf_counter(), time.thread_time()
+            r1 = resource.getrusage(resource.RUSAGE_THREAD)
+            totals[name] += [number[name], t1 - t0, c1 - c0, r1.ru_nivcsw - r0.ru_nivcsw,
+                             r1.ru_nvcsw - r0.ru_nvcsw, r1.ru_minflt - r0.ru_minflt]
+    parts = []
+    for name, (calls, wall, cpu, inv, vol, faults) in totals.items():
+        wait = f", {(wall - cpu) / inv * 1e3:.1f} ms waited a switch" if inv else ""
+        parts.append(f"{name} {wall / calls * 1e3:.2f} ms wall and {cpu / calls * 1e3:.2f} ms "
+                     f"CPU a call, per 1,000 calls {inv / calls * 1e3:.0f} involuntary and "
+                     f"{vol / calls * 1e3:.0f} voluntary context switches and "
+                     f"{faults / calls * 1e3:.0f} page faults{wait}")
+    print(f"where the wall time goes (loops of {repeats} rounds, this thread's getrusage; load "
+          f"average {os.getloadavg()[0]:.1f}): " + "; ".join(parts))
+
+
+def _cpu_per_call(fn) -> float:
+    fn()  # the first fit of a candidate set plans it
+    t0 = time.thread_time()
+    fn()
+    return max(time.thread_time() - t0, 1e-6)
+
+
 def small_fit_figure(rows: list[dict], path: Path) -> None:
     import matplotlib
 
@@ -473,6 +520,7 @@ def main() -> None:
     small = small_fit_table((N,) if args.quick else (N, HOUR_100HZ), repeats)
     small_fit_parts(repeats)
     blas_alternatives(repeats)
+    waiting(repeats)
     if not args.quick:
         small_fit_figure(small, args.figure)
         shutil.copy(args.figure, FIGURES / args.figure.name)
