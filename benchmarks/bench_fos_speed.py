@@ -63,7 +63,11 @@ MSE most (Korenberg's Q); ``common`` counts the selected terms they share.
 The figure of Table 1 goes to ``results/fos_speed.png`` and ``docs/pages/figures/``.
 
 After Table 1 it times the parts of the CP = 2, 10-term fit on 36,000 samples: the first
-batch of correlations, every Gram column, the search, and the rest of the fit.
+batch of correlations, every Gram column, the search, and the rest of the fit; then the
+same moments as BLAS products of the lag matrix (every cubic moment in one product, the
+Gram column of each selected cross-product in one more), checked equal to the tables';
+then where the wall time of the CP = 1 fit goes that its CPU time does not (context
+switches and page faults of the timing thread).
 
 Run: ``python benchmarks/bench_fos_speed.py [--repeats R] [--quick] [--small]``
 """
@@ -71,13 +75,17 @@ Run: ``python benchmarks/bench_fos_speed.py [--repeats R] [--quick] [--small]``
 from __future__ import annotations
 
 import argparse
+import os
+import resource
 import shutil
+import time
 import warnings
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 from _common import interleaved_median, limit_blas, machine_line, settle_allocator
+from numpy.lib.stride_tricks import sliding_window_view
 from scipy.signal import lfilter
 from sklearn.linear_model import OrthogonalMatchingPursuit, orthogonal_mp_gram
 from statsmodels.regression.linear_model import burg
@@ -217,6 +225,125 @@ def small_fit_parts(repeats: int) -> None:
     print(f"the shapes' {fma / 1e6:.1f} M multiply-adds take "
           f"{(cpu['with all Gram columns']) * 1e3:.2f} ms with the rest of the tables: "
           f"{fma / cpu['with all Gram columns'] / 1e9:.1f} G/s")
+
+
+def lag_matrix_product(lags: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """``lags.T @ diag(weight) @ lags`` by matrix products over blocks of 2,048 rows.
+
+    ``lags`` column-major: from it, in blocks that stay in cache, BLAS ran this product
+    twice as fast as in one call or from a row-major copy (36,000 x 11, one thread).
+    """
+    out = np.zeros((lags.shape[1], lags.shape[1]))
+    for lo in range(0, len(lags), 2048):
+        block = lags[lo : lo + 2048]
+        out += (block * weight[lo : lo + 2048, None]).T @ block
+    return out
+
+
+def blas_alternatives(repeats: int) -> None:
+    """The same moments as matrix products of the lag matrix, against the tables.
+
+    With ``X`` the N x (L + 1) lag matrix (``X[n, i] = y(n - i)`` over the window, a
+    column-major copy of a sliding window), every cubic moment ``sum y(n) y(n-i) y(n-j)`` is
+    one product ``X' diag(y) X``, and the Gram column of a selected cross-product
+    ``s = y(n-a) y(n-b)`` against every candidate is ``X' diag(s) X`` and ``X' s``.  Both
+    products compute every (i, j) twice, and from the candidates' moments themselves
+    rather than their shapes; the tables sum each shape once.  The first batch of the
+    tables holds the cubic moments and more (the means, 11 quartic shapes of the squares,
+    the Gram columns of the linear candidates).
+    """
+    signal = ar3_signal(N)
+    y = signal - signal.mean()
+    terms = [t for t in generate_terms(CandidateSpec(10, 2)) if not t.is_constant]
+    model = FOSModel(max_lag=10, degree=2, stop="max_terms", max_terms=10).fit(signal)
+    selected = [t for t in terms if t.name in model.terms_ and t.degree == 2]
+    n = N - 10
+    corr = LagCorrelations(terms, {"y": y}, 10)
+
+    def lag_matrix() -> np.ndarray:
+        return np.asfortranarray(sliding_window_view(y, 11)[:, ::-1])  # X[n, i] = y(n - i)
+
+    def cubic() -> np.ndarray:
+        x = lag_matrix()
+        return lag_matrix_product(x, x[:, 0])
+
+    def columns() -> list[np.ndarray]:
+        x = lag_matrix()
+        out = []
+        for term in selected:
+            (_, a), (_, b) = term.factors
+            s = x[:, a] * x[:, b]
+            out.append(np.concatenate([x.T @ s, lag_matrix_product(x, s).ravel()]))
+        return out
+
+    # the same moments from both: every candidate's mean(y p_c), and the selected Gram columns
+    x, lags = lag_matrix(), [[g for _, g in t.factors] for t in terms]
+    linear, cubic_moments = x.T @ x[:, 0] / n, cubic() / n
+    target = np.array([linear[g[0]] if len(g) == 1 else cubic_moments[g[0], g[1]] for g in lags])
+    worst = float(np.abs(target - corr.target).max() / np.abs(corr.target).max())
+    for term, col in zip(selected, columns()):
+        table = corr.column(terms.index(term))
+        lin, quad = col[:11] / n, col[11:].reshape(11, 11) / n
+        blas = np.array([lin[g[0]] if len(g) == 1 else quad[g[0], g[1]] for g in lags])
+        worst = max(worst, float(np.abs(blas - table).max() / np.abs(table).max()))
+
+    def tables() -> None:
+        LagCorrelations(terms, {"y": y}, 10).column(len(terms) - 1)  # and every Gram column
+
+    with one_blas_thread():
+        med = interleaved_median({"first": partial(LagCorrelations, terms, {"y": y}, 10),
+                                  "tables": tables, "cubic": cubic, "columns": columns},
+                                 repeats, cpu=True)
+    cpu = {k[:-4]: v * 1e3 for k, v in med.items() if k.endswith(" cpu")}
+    print(f"the same moments as products of the lag matrix X (36,000 x 11, column-major, "
+          f"BLAS on one thread; median CPU ms): every cubic moment as X' diag(y) X "
+          f"{cpu['cubic']:.2f} against {cpu['first']:.2f} for the whole first batch from the "
+          f"tables; the Gram columns of the {len(selected)} cross-products the fit selects "
+          f"as X' diag(s) X and X' s {cpu['columns']:.2f} against "
+          f"{cpu['tables'] - cpu['first']:.2f} for every Gram column from the tables; the "
+          f"two agree to {worst:.1e} of the largest moment")
+
+
+def waiting(repeats: int) -> None:
+    """Where the wall time of the CP = 1, 10-term fit goes that its CPU time does not.
+
+    Loops of consecutive calls (at least 20 ms each, interleaved with Burg's), with the
+    thread's context switches and page faults from ``getrusage``: a call that waits for
+    a core shows involuntary switches, one that waits for anything else voluntary ones.
+    """
+    if not hasattr(resource, "RUSAGE_THREAD"):  # Linux only
+        return
+    signal = ar3_signal(N)
+    model = FOSModel(max_lag=10, degree=1, stop="max_terms", max_terms=10)
+    fns = {"FOS CP 1": partial(model.fit, signal), "Burg": partial(burg, signal, 10)}
+    number = {name: max(1, int(0.02 / _cpu_per_call(fn))) for name, fn in fns.items()}
+    totals = {name: np.zeros(6) for name in fns}  # calls, wall, cpu, involuntary, voluntary, faults
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            r0, t0, c0 = resource.getrusage(resource.RUSAGE_THREAD), time.perf_counter(), \
+                time.thread_time()
+            for _ in range(number[name]):
+                fn()
+            t1, c1 = time.perf_counter(), time.thread_time()
+            r1 = resource.getrusage(resource.RUSAGE_THREAD)
+            totals[name] += [number[name], t1 - t0, c1 - c0, r1.ru_nivcsw - r0.ru_nivcsw,
+                             r1.ru_nvcsw - r0.ru_nvcsw, r1.ru_minflt - r0.ru_minflt]
+    parts = []
+    for name, (calls, wall, cpu, inv, vol, faults) in totals.items():
+        wait = f", {(wall - cpu) / inv * 1e3:.1f} ms waited a switch" if inv else ""
+        parts.append(f"{name} {wall / calls * 1e3:.2f} ms wall and {cpu / calls * 1e3:.2f} ms "
+                     f"CPU a call, per 1,000 calls {inv / calls * 1e3:.0f} involuntary and "
+                     f"{vol / calls * 1e3:.0f} voluntary context switches and "
+                     f"{faults / calls * 1e3:.0f} page faults{wait}")
+    print(f"where the wall time goes (loops of {repeats} rounds, this thread's getrusage; load "
+          f"average {os.getloadavg()[0]:.1f}): " + "; ".join(parts))
+
+
+def _cpu_per_call(fn) -> float:
+    fn()  # the first fit of a candidate set plans it
+    t0 = time.thread_time()
+    fn()
+    return max(time.thread_time() - t0, 1e-6)
 
 
 def small_fit_figure(rows: list[dict], path: Path) -> None:
@@ -392,6 +519,8 @@ def main() -> None:
 
     small = small_fit_table((N,) if args.quick else (N, HOUR_100HZ), repeats)
     small_fit_parts(repeats)
+    blas_alternatives(repeats)
+    waiting(repeats)
     if not args.quick:
         small_fit_figure(small, args.figure)
         shutil.copy(args.figure, FIGURES / args.figure.name)
