@@ -14,7 +14,8 @@ Three parts, each a section of the page:
   level), what else was kept, and in how many seeds the 30 s bias RMS ended lower.
 * ``close-loop-sweeps``: one IMU at 1 Hz whose gx_dps and ax_mps2 biases follow the
   temperature (data_synth's ``temperature_sweep``, ``temperature_sweep_lag`` with a
-  30 min thermal lag, and three day-long ``temperature_sessions``), seeds 0-9: the
+  30 min thermal lag, and three day-long ``temperature_sessions``, together and days 2
+  and 3 alone), seeds 0-9: the
   temperature named, the 30 min outage bias RMS of the prediction segment (of every
   session's predicted part, pooled) against the starting model with the level alone,
   and their controls (no temperature effect, the same draws), seeds 0-19.
@@ -25,7 +26,9 @@ Three parts, each a section of the page:
 
 Full reports for seed 0 go to ``studies/results/close_loop/<record>/``.
 
-Run: ``python studies/close_loop_synthetic.py [--jobs N]`` (about half an hour on 2 workers).
+Run: ``python studies/close_loop_synthetic.py [--jobs N] [--parts synthetic,sweeps,companions]``
+(about half an hour on 2 workers); ``--parts`` runs those parts only and rewrites only their
+sections.
 """
 
 from __future__ import annotations
@@ -58,6 +61,7 @@ from fosmodel.loop import (
 from fosmodel.typeset import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "close_loop"
+REL = OUT.relative_to(README.parent)
 JOBS = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 2
 # (record name, scenario, overrides)
 EFFECTS = [(name, name, {}) for name in (
@@ -71,14 +75,20 @@ EFFECTS += [(name, name, {}) for name in ("slow_warmup_drift", "slow_steps",
                                           "slow_warmup_drift_temperature")]
 CONTROLS = ["clean", "unrelated_temperature", "slow_clean", "slow_unrelated_temperature"]
 SEEDS, CONTROL_SEEDS = range(10), range(20)
-#: The day-long records: (label, scenario, column, its sensor and units).
-SWEEPS = [("one day, gx_dps", "temperature_sweep", "gx_dps"),
-          ("one day, ax_mps2", "temperature_sweep", "ax_mps2"),
-          ("one day, 30 min thermal lag, gx_dps", "temperature_sweep_lag", "gx_dps"),
-          ("three days, gx_dps", "temperature_sessions", "gx_dps"),
-          ("three days, ax_mps2", "temperature_sessions", "ax_mps2")]
-SWEEP_CONTROLS = [("one day, control", "temperature_sweep_control", "gx_dps"),
-                  ("three days, control", "temperature_sessions_control", "gx_dps")]
+#: The day-long records: (label, scenario, column, the one session looped alone or None for
+#: all).  Days 2 and 3 of the three are looped alone too, as one looks at a single session of
+#: a multi-session record: their fitting halves span a temperature change (day 1's does not).
+SWEEPS = [("one day, gx_dps", "temperature_sweep", "gx_dps", None),
+          ("one day, ax_mps2", "temperature_sweep", "ax_mps2", None),
+          ("one day, 30 min thermal lag, gx_dps", "temperature_sweep_lag", "gx_dps", None),
+          ("three days, gx_dps", "temperature_sessions", "gx_dps", None),
+          ("three days, ax_mps2", "temperature_sessions", "ax_mps2", None),
+          ("day 2 of three alone, gx_dps", "temperature_sessions", "gx_dps", 2),
+          ("day 3 of three alone, gx_dps", "temperature_sessions", "gx_dps", 3),
+          ("day 2 of three alone, ax_mps2", "temperature_sessions", "ax_mps2", 2),
+          ("day 3 of three alone, ax_mps2", "temperature_sessions", "ax_mps2", 3)]
+SWEEP_CONTROLS = [("one day, control", "temperature_sweep_control", "gx_dps", None),
+                  ("three days, control", "temperature_sessions_control", "gx_dps", None)]
 UNITS = {"g": ("gyro", "deg/s"), "a": ("accel", "m/s^2")}
 
 
@@ -194,10 +204,13 @@ def _config(column: str, rate: float) -> LoopConfig:
     return LoopConfig(rate=rate, sensor=sensor, units=units)
 
 
-def sweep_seed(label: str, scenario: str, column: str, seed: int) -> dict[str, Any]:
-    """One seed of a day-long record or of three: the driver named, the 30 min bias against
-    the level alone, and (seed 0) the report."""
+def sweep_seed(label: str, scenario: str, column: str, day: int | None,
+               seed: int) -> dict[str, Any]:
+    """One seed of a day-long record or of three (or of one ``day`` of three): the driver
+    named, the 30 min bias against the level alone, and (seed 0) the report."""
     sessions = make_sessions(scenario, seed=seed)
+    if day is not None:
+        sessions = sessions[day - 1:day]
     config = _config(column, sessions[0].rate)
     if len(sessions) > 1:
         res: Any = close_sessions([Session(r.columns[column], {k: v for k, v in r.columns.items()
@@ -224,7 +237,8 @@ def sweep_seed(label: str, scenario: str, column: str, seed: int) -> dict[str, A
            "ratio": None if after is None or alone is None else after / alone,
            "worse": bool(res.worse()), "kept": "; ".join(e.describe() for e in kept) or "none"}
     if seed == 0:
-        write(res, OUT / f"{scenario}_{column}", f"{label} (seed 0)")
+        write(res, OUT / (f"{scenario}_{column}" + (f"_day{day}" if day else "")),
+              f"{label} (seed 0)")
     return out
 
 
@@ -268,24 +282,25 @@ def _truth_corr(column: str) -> dict[str, float]:
 # -- the pages ----------------------------------------------------------------------------------
 
 
-def _tasks() -> list[tuple]:
-    """Every run as ``(key, function, arguments)``; the key is ``(part, record, seed)``."""
-    tasks = [(("effect", label, seed), effect_seed, (label, scenario, overrides, seed))
-             for label, scenario, overrides in EFFECTS for seed in SEEDS]
-    tasks += [(("control", name, seed), control_seed, (name, seed))
-              for name in CONTROLS for seed in CONTROL_SEEDS]
-    tasks += [(("sweep", label, seed), sweep_seed, (label, scenario, column, seed))
-              for label, scenario, column in [*SWEEPS, *SWEEP_CONTROLS]
-              for seed in (CONTROL_SEEDS if "control" in scenario else SEEDS)]
+def _tasks(parts: list[str]) -> list[tuple]:
+    """Every run of ``parts`` as ``(key, function, arguments)``; the key is ``(kind, record,
+    seed)``."""
+    tasks = []
+    if "synthetic" in parts:
+        tasks += [(("effect", label, seed), effect_seed, (label, scenario, overrides, seed))
+                  for label, scenario, overrides in EFFECTS for seed in SEEDS]
+        tasks += [(("control", name, seed), control_seed, (name, seed))
+                  for name in CONTROLS for seed in CONTROL_SEEDS]
+    if "sweeps" in parts:
+        tasks += [(("sweep", label, seed), sweep_seed, (label, scenario, column, day, seed))
+                  for label, scenario, column, day in [*SWEEPS, *SWEEP_CONTROLS]
+                  for seed in (CONTROL_SEEDS if "control" in scenario else SEEDS)]
     return tasks
 
 
-def main() -> None:
-    OUT.mkdir(parents=True, exist_ok=True)
-    tasks = _tasks()
-    done = dict(zip((key for key, *_ in tasks),
-                    in_workers(((f, a) for _, f, a in tasks), JOBS)))
-    effects, controls, sweeps, sweep_controls = [], [], [], []
+def synthetic_section(done: dict) -> dict[str, list[dict[str, Any]]]:
+    """The short records' table and their controls', into the page."""
+    effects, controls = [], []
     for label, _, _ in EFFECTS:
         seeds = [done["effect", label, s] for s in SEEDS]
         n = len(SEEDS)
@@ -302,7 +317,20 @@ def main() -> None:
                          f"{sum(s['added'] for s in seeds)}/{len(CONTROL_SEEDS)}",
                          "Records worse on prediction":
                          f"{sum(s['worse'] for s in seeds)}/{len(CONTROL_SEEDS)}"})
-    for label, _, _ in SWEEPS:
+    figure = show_figure(OUT / "slow_random_walk_temperature" / "residual.png",
+                         "loop_residual.png")
+    replace_section("close-loop-synthetic", "\n".join([
+        markdown_table(pd.DataFrame(effects), digits=4), "",
+        markdown_table(pd.DataFrame(controls)), "",
+        f"Reports for seed 0, with their residual figures: `{REL}/<record>/report.md`.", "",
+        f"![a bias random walk with a temperature effect, seed 0]({figure})"]))
+    return {"effects_found": effects, "controls": controls}
+
+
+def sweeps_section(done: dict) -> dict[str, list[dict[str, Any]]]:
+    """The day-long records' table and their controls', into the page."""
+    sweeps, sweep_controls = [], []
+    for label, *_ in SWEEPS:
         seeds = [done["sweep", label, s] for s in SEEDS]
         ratios = [s["ratio"] for s in seeds if s["ratio"] is not None]
         sweeps.append({"Record": label, "Kept (seed 0)": seeds[0]["kept"],
@@ -314,35 +342,47 @@ def main() -> None:
                            f"{np.median(ratios):.3g} ({min(ratios):.3g}-{max(ratios):.3g})"
                            if ratios else "-",
                        "Worse on prediction": f"{sum(s['worse'] for s in seeds)}/{len(SEEDS)}"})
-    for label, _, _ in SWEEP_CONTROLS:
+    for label, *_ in SWEEP_CONTROLS:
         seeds = [done["sweep", label, s] for s in CONTROL_SEEDS]
         sweep_controls.append({"Record": label, "Temperature named":
                                f"{sum(s['named'] for s in seeds)}/{len(CONTROL_SEEDS)}",
                                "Worse on prediction":
                                f"{sum(s['worse'] for s in seeds)}/{len(CONTROL_SEEDS)}"})
-    companions = companion_rows()
-    frames = {"effects_found": effects, "controls": controls, "sweeps": sweeps,
-              "sweep_controls": sweep_controls, "companions": companions}
-    for stem, rows in frames.items():
-        pd.DataFrame(rows).to_csv(OUT / f"{stem}.csv", index=False)
-    rel = OUT.relative_to(README.parent)
-    figure = show_figure(OUT / "slow_random_walk_temperature" / "residual.png",
-                         "loop_residual.png")
-    replace_section("close-loop-synthetic", "\n".join([
-        markdown_table(pd.DataFrame(effects), digits=4), "",
-        markdown_table(pd.DataFrame(controls)), "",
-        f"Reports for seed 0, with their residual figures: `{rel}/<record>/report.md`.", "",
-        f"![a bias random walk with a temperature effect, seed 0]({figure})"]))
     replace_section("close-loop-sweeps", "\n".join([
         markdown_table(pd.DataFrame(sweeps), digits=3), "",
         markdown_table(pd.DataFrame(sweep_controls)), "",
-        f"Reports for seed 0: `{rel}/temperature_sweep_gx_dps/report.md`, "
-        f"`{rel}/temperature_sessions_gx_dps/report.md`..."]))
+        f"Reports for seed 0: `{REL}/temperature_sweep_gx_dps/report.md`, "
+        f"`{REL}/temperature_sessions_gx_dps/report.md`..."]))
+    return {"sweeps": sweeps, "sweep_controls": sweep_controls}
+
+
+def companions_section(_: dict) -> dict[str, list[dict[str, Any]]]:
+    """The companions' table, into the page."""
+    companions = companion_rows()
     replace_section("close-loop-companions", "\n".join([
         markdown_table(pd.DataFrame(companions)), "",
-        f"Report of gx_dps: `{rel}/companion_noise_gx_dps/report.md`."]))
-    for rows in frames.values():
-        print(pd.DataFrame(rows).to_string(index=False))
+        f"Report of gx_dps: `{REL}/companion_noise_gx_dps/report.md`."]))
+    return {"companions": companions}
+
+
+SECTIONS = {"synthetic": synthetic_section, "sweeps": sweeps_section,
+            "companions": companions_section}
+
+
+def main() -> None:
+    parts = sys.argv[sys.argv.index("--parts") + 1].split(",") if "--parts" in sys.argv \
+        else list(SECTIONS)
+    unknown = sorted(set(parts) - set(SECTIONS))
+    if unknown:
+        sys.exit(f"--parts: unknown {', '.join(unknown)}; the parts are {', '.join(SECTIONS)}")
+    OUT.mkdir(parents=True, exist_ok=True)
+    tasks = _tasks(parts)
+    done = dict(zip((key for key, *_ in tasks),
+                    in_workers(((f, a) for _, f, a in tasks), JOBS)))
+    for part in parts:
+        for stem, rows in SECTIONS[part](done).items():
+            pd.DataFrame(rows).to_csv(OUT / f"{stem}.csv", index=False)
+            print(pd.DataFrame(rows).to_string(index=False))
 
 
 if __name__ == "__main__":
