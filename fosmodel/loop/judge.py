@@ -277,7 +277,7 @@ class Judgement:
         key = self.kept_on or ONE_STEP
         found = self.gains(key)
         chosen = range(len(found)) if origins is None else origins
-        gains = [found[i] for i in chosen if i < len(found) and found[i] is not None]
+        gains = [g for i in chosen if i < len(found) for g in [found[i]] if g is not None]
         return float(np.mean(gains)), self.at(key).t
 
     def judged_from(self) -> set[int]:
