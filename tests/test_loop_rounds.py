@@ -32,5 +32,10 @@ def test_the_kept_are_ranked_over_the_origins_that_judged_them_all():
     assert choose([level, judged]) is level
     # from the origins both were judged from
     partly = _trial(driver.effect, 0.80, [None, 0.95, 0.90])
-    assert level.judgement.judged_from() & partly.judgement.judged_from() == {1, 2, 3}
+    assert level.judgement.judged_from() & partly.judgement.judged_from() == {0, 1, 2}
     assert choose([level, partly]) is partly  # 0.883 against 0.867
+    # over several sessions a level is judged on the held-out sessions only (one gain), a
+    # drift ahead in time too (a gain per session, then the held-out one): their ends meet
+    pooled = Judgement(level.judgement.last, (), None, "outage_1800s")
+    ahead = _trial(make("drift", tau_s=100.0), 0.5, [0.99, 0.99, 0.99])
+    assert pooled.judged_from() == {0} and ahead.judgement.score([0])[0] == 0.5
