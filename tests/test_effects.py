@@ -163,6 +163,13 @@ def test_slow_relations_and_sameness():
     assert make("driver", channel="t", part="fast", max_lag=1, tau_s=20.0).strict
     assert not make("driver", channel="t", part="fast").same_as(make("driver", channel="t"))
     assert make("level", taus=(1.0,)).same_as(make("level", taus=(2.0,)))
+    # a slow part's forms with the level or without are one cause, added once; other forms
+    # (a lag the residual still follows) are another
+    lagged = [["pow(lowpass(t,600s),1,10)", 2.0]]
+    alone = make("driver", channel="t", forms=[["pow(t,1,10)", 1.0]])
+    assert make("driver", channel="t", forms=[["pow(t,1,10)", 0.5]],
+                level_taus=[10.0]).same_as(alone)
+    assert not make("driver", channel="t", forms=lagged).same_as(alone)
     assert make("periodic", freq_hz=7.30).same_as(make("periodic", freq_hz=7.33))
     assert make("drift").waits_for == ("level", "driver") == make("step").waits_for
     assert not make("periodic").pooled and not make("step").pooled

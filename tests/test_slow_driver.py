@@ -114,3 +114,50 @@ def test_a_sweep_under_a_flat_bias_instability_is_found_at_the_longer_scale():
     assert finding.evidence["block_s"] == 4 * block_samples([slice(0, len(y) // 2)], 1.0, 20.0)
     weights = dict(finding.evidence["forms"])
     assert weights[next(iter(weights))] == pytest.approx(5e-4, rel=0.2)
+
+
+def _ramp_then_hold(seed, n=40_000):
+    """A driver that ramps steadily over the first half and holds over the second, and an
+    output that follows it (5e-3 per degree) beside a bias random walk."""
+    rng = np.random.default_rng(seed)
+    temp = np.minimum(np.linspace(5.0, 35.0, n), 20.0)
+    y = 5e-3 * temp + np.cumsum(rng.normal(0, 5e-5, n)) + rng.normal(0, 0.01, n)
+    return y, {"pow(temp_c,1,20)": temp - 20.0}
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_steady_ramp_beside_a_trend_does_not_tell_a_sensitivity_from_none(seed):
+    """Over the ramp alone the driver is one line with the trend fitted beside it; once it
+    has held still a while its sensitivity shows."""
+    from fosmodel.loop.driver_forms import TREND, forms_p, refit_forms
+
+    y, forms = _ramp_then_hold(seed)
+    block = 100
+    assert forms_p(y, forms, [slice(0, 18_000)], block, TREND) > 1e-3
+    assert forms_p(y, forms, [slice(0, 30_000)], block, TREND) < 1e-6
+    (weight,) = refit_forms(y, forms, [slice(0, 30_000)], block, TREND).values()
+    assert weight == pytest.approx(5e-3, rel=0.3)
+    (over_ramp,) = refit_forms(y, forms, [slice(0, 18_000)], block, TREND).values()
+    assert abs(over_ramp) > 100 * 5e-3  # what the noise makes it
+    # beside itself a form adds nothing
+    assert forms_p(y, forms, [slice(0, 30_000)], block, TREND,
+                   beside={"same": forms["pow(temp_c,1,20)"]}) == pytest.approx(1.0, abs=1e-6)
+
+
+def test_an_origin_whose_past_is_a_steady_ramp_does_not_judge_the_driver():
+    """The day's accelerometer sweep (5e-4 m/s^2/C): its temperature climbs steadily until a
+    third of the day, so the origins at a quarter and a third of it cannot estimate the
+    sensitivity beside a trend; judged from them its free runs lost hundreds of times the
+    level's 30 min bias and the temperature went unnamed.  Judged from the origins that can,
+    it goes in, once."""
+    from data_synth import make_sessions
+
+    rec = make_sessions("temperature_sweep", seed=2)[0]
+    y = rec.columns["ax_mps2"]
+    channels = {k: v for k, v in rec.columns.items() if k != "ax_mps2"}
+    res = close_loop(y, channels, LoopConfig(rate=1.0, sensor="accel", units="m/s^2"))
+    (slow,) = [s for s in res.steps if s.effect.kind == "driver"]
+    assert slow.effect.channel == "temp_c" and slow.effect.part == "slow"
+    assert slow.judgement.gains(slow.judgement.kept_on)[:2] == [None, None]
+    assert res.after["bias_rms"]["1800"] < 0.8 * res.before["bias_rms"]["1800"]
+    assert not res.worse()

@@ -288,6 +288,15 @@ def effective_samples(residual: np.ndarray) -> float:
     return n * (1 - r) / (1 + r)
 
 
+def _innovations_of(target: np.ndarray, columns: Mapping[str, np.ndarray],
+                    parts: Sequence[slice], block: int, gain: float,
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Return the centred innovations of ``target`` and of each form (a column each)."""
+    y = innovations(block_means(target, parts, block), gain)
+    f = innovations(block_means(np.column_stack(list(columns.values())), parts, block), gain)
+    return y - y.mean() if len(y) else y, f - f.mean(axis=0) if len(f) else f
+
+
 def refit_forms(target: np.ndarray, columns: Mapping[str, np.ndarray], parts: Sequence[slice],
                 block: int, gain: float) -> dict[str, float]:
     """Return the weights of the given forms refitted on ``parts`` at the block-scale ``gain``.
@@ -297,14 +306,45 @@ def refit_forms(target: np.ndarray, columns: Mapping[str, np.ndarray], parts: Se
     that does not vary there keeps a weight of 0.
     """
     names = list(columns)
-    y = innovations(block_means(target, parts, block), gain)
-    f = innovations(block_means(np.column_stack([columns[n] for n in names]), parts, block),
-                    gain)
+    y, f = _innovations_of(target, columns, parts, block, gain)
     if len(y) < 2:
         return dict.fromkeys(names, 0.0)
-    f, y = f - f.mean(axis=0), y - y.mean()
     coef = np.linalg.lstsq(f, y, rcond=None)[0]
     return {n: float(w) for n, w in zip(names, coef)}
+
+
+def forms_p(target: np.ndarray, columns: Mapping[str, np.ndarray], parts: Sequence[slice],
+            block: int, gain: float, beside: Mapping[str, np.ndarray] | None = None) -> float:
+    """Return the p-value of the forms ``columns`` on ``parts``: the F test against none.
+
+    As :func:`slow_driver` tests them (the innovations at the block-scale ``gain``, their
+    count as independent samples), but of forms already chosen: no count of bases tried.
+    The forms ``beside`` (a compensation already in) are fitted in both models.  A large
+    p-value says that these data do not tell the forms' weights from zero: over a steady
+    ramp of the driver beside a trend, say, where the two are one line.
+    """
+    beside = dict(beside or {})
+    y, f = _innovations_of(target, {**beside, **columns}, parts, block, gain)
+    k, j = len(columns), len(beside)
+    if len(y) <= k + j + 2 or not np.any(y):
+        return 1.0
+    sse = _sse(y, f)
+    sse0 = _sse(y, f[:, :j]) if j else float(y @ y)
+    dof = effective_samples(_residual(y, f)) - k - j - 1
+    if dof <= 0:
+        return 1.0
+    if sse <= 0:
+        return 0.0
+    return float(stats.f.sf(((sse0 - sse) / k) / (sse / dof), k, dof))
+
+
+def _residual(y: np.ndarray, x: np.ndarray) -> np.ndarray:
+    return y - x @ np.linalg.lstsq(x, y, rcond=None)[0]
+
+
+def _sse(y: np.ndarray, x: np.ndarray) -> float:
+    residual = _residual(y, x)
+    return float(residual @ residual)
 
 
 def compensation_of(finding: Finding) -> dict[str, float]:

@@ -10,7 +10,7 @@ from ..core.levels import level_name, level_series
 from ..models.bound import BoundModel
 from ..models.model import FOSModel
 from .config import LoopConfig
-from .driver_forms import refit_forms
+from .driver_forms import forms_p, refit_forms
 from .effects import CandidateFamily, Effect
 from .judge import Forecasts, Judgement, compare, forecasts, verdict
 from .record import LoopRecord
@@ -124,7 +124,8 @@ class Judge:
 
     The current model's refits and forecasts from every origin are computed once
     per round.  An origin from which a trial's new terms cannot be estimated (a
-    step after it: the refit drops them) cannot judge it, and is left out.
+    step after it: the refit drops them; a driver's forms its past does not tell from
+    none) cannot judge it, and is left out.
     """
 
     def __init__(self, fitter: Fitter, current: BoundModel, family: CandidateFamily,
@@ -173,11 +174,34 @@ class Judge:
 
     def _earlier(self, trial: BoundModel, family: CandidateFamily, origin: int,
                  current: BoundModel, base: Forecasts) -> tuple | None:
+        if not self._shows_driver(family, origin):
+            return None  # its past cannot tell the driver's sensitivity from none
         refit = self._refit(trial, family, origin)
         if set(refit.model.terms_) <= set(current.model.terms_) \
                 and refit.model.compensation == current.model.compensation:
             return None  # nothing new estimable
         return compare(base, self._forecasts(refit))
+
+    def _shows_driver(self, family: CandidateFamily, origin: int) -> bool:
+        """Whether the past before ``origin`` tells the trial's new driver forms from none.
+
+        Their F test there (:func:`fosmodel.loop.driver_forms.forms_p`, beside the forms
+        already in) at the level a driver is offered at.  Over a steady ramp of the driver
+        the refitted sensitivity is what the noise makes it (an accelerometer's
+        5e-4 m/s^2/C read -4.6e-3 with the ramp alone before the origin, and from there its
+        30 min outage biases' sum of squares was 926 times the level's): such an origin
+        judges the estimation noise of a short past, not the driver, as an origin before
+        a step cannot judge the step.
+        """
+        old = self.family.compensation
+        new = [n for n, w in family.compensation.items() if old.get(n) != w]
+        if not new:
+            return True
+        block, gain = family.comp_fit
+        columns = family.comp_columns
+        p = forms_p(self.y, {n: columns[n] for n in new}, [slice(0, origin)], block, gain,
+                    {n: columns[n] for n in columns if n not in new})
+        return p < self.fitter.config.alpha
 
     def __call__(self, trial: BoundModel, family: CandidateFamily,
                  effect: Effect) -> Judgement:

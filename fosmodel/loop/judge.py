@@ -37,6 +37,7 @@ R. J. Hyndman and G. Athanasopoulos, *Forecasting: Principles and Practice*,
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
@@ -267,11 +268,23 @@ class Judgement:
                    for cs in (self.earlier or ())]
         return [*earlier, self.at(key).gain]
 
-    def score(self) -> tuple[float, float]:
-        """Return the gain it is kept on, averaged over the origins, and its t: what ranks it."""
+    def score(self, origins: Iterable[int] | None = None) -> tuple[float, float]:
+        """Return the gain it is kept on, averaged over the origins, and its t: what ranks it.
+
+        ``origins`` are the origins to average over, counted back from the end (0, the
+        fitting segment's end; 1, the origin before it...); by default every origin that
+        judged it.
+        """
         key = self.kept_on or ONE_STEP
-        gains = [g for g in self.gains(key) if g is not None]
+        found = self.gains(key)[::-1]
+        chosen = range(len(found)) if origins is None else origins
+        gains = [g for i in chosen if i < len(found) for g in [found[i]] if g is not None]
         return float(np.mean(gains)), self.at(key).t
+
+    def judged_from(self) -> set[int]:
+        """Return the origins that judged it, counted back from the end (0, always)."""
+        found = self.gains(self.kept_on or ONE_STEP)[::-1]
+        return {i for i, g in enumerate(found) if g is not None} | {0}
 
     def held_back(self, reason: str) -> Judgement:
         """Return this judgement, not accepted, for ``reason``."""

@@ -121,13 +121,16 @@ def _kind_words(kinds: list[str]) -> list[str]:
 def choose(kept: list[Trial]) -> Trial:
     """Which kept candidate goes in first: the largest out-of-sample gain.
 
-    The gain is that of the comparison it was kept on, averaged over the origins; ties go
-    to the larger t statistic.  Evidence and out-of-sample gain decide, not a fixed order
-    of kinds.  A drift and a step, which look alike over a short stretch, are told apart by
-    their fit to the residual when it is strongly better (BIC difference of
-    :data:`STRONG_BIC` or more).
+    The gain is that of the comparison it was kept on, averaged over the origins that
+    judged every one of them (an origin that could not judge one, a step after it or a
+    driver its past does not show, would compare a gain far from its data with one next
+    to it); ties go to the larger t statistic.  Evidence and out-of-sample gain decide,
+    not a fixed order of kinds.  A drift and a step, which look alike over a short
+    stretch, are told apart by their fit to the residual when it is strongly better (BIC
+    difference of :data:`STRONG_BIC` or more).
     """
-    best = max(kept, key=lambda t: t.judgement.score())
+    common = sorted(set.intersection(*(t.judgement.judged_from() for t in kept)))
+    best = max(kept, key=lambda t: t.judgement.score(common))
     pair = {"drift": "step", "step": "drift"}
     if best.effect.kind in pair:
         other = [t for t in kept if t.effect.kind == pair[best.effect.kind]]

@@ -117,8 +117,12 @@ class Driver(Effect):
         return self.part == "fast"
 
     def identity(self) -> tuple:
-        """Return the channel, the part, and whether the level comes with it."""
-        return (self.channel, self.part, bool(self.level_taus))
+        """Return the channel, the part, and the slow part's forms.
+
+        With the level or without, the same forms are the same cause: once one is in, the
+        other would add its weights to the compensation a second time.
+        """
+        return (self.channel, self.part, tuple(sorted(n for n, _ in self.forms)))
 
     def describe(self) -> str:
         """``driver temp_c, slow part (lag 600 s, powers 1, 2) with the level``, ..."""
