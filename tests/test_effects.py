@@ -10,6 +10,7 @@ from fosmodel.core.derived import cosine_name, lowpass_name, power_name, sine_na
 from fosmodel.core.levels import level_series
 from fosmodel.loop.config import LoopConfig
 from fosmodel.loop.diagnose import Finding
+from fosmodel.loop.driver_forms import follows_time
 from fosmodel.loop.effects import (
     CandidateFamily,
     Effect,
@@ -22,6 +23,7 @@ from fosmodel.loop.effects import (
     register,
     unregister,
 )
+from fosmodel.loop.effects.drift import Drift, trend_note
 from fosmodel.loop.record import LoopRecord
 from fosmodel.loop.roles import channel_roles
 
@@ -223,3 +225,39 @@ def test_a_new_kind_is_one_registered_class_and_runs_through_the_loop(toy_kind, 
     assert "toy line 0.02 Hz" in (write_loop_report(res, tmp_path, "toy")[-1]).read_text()
     with pytest.raises(ValueError, match="registered already"):
         register(type("Other", (_SlowLine,), {"kind": "toy_slow_line"}))
+
+
+def _sweep_offer(temp, form):
+    """An offer on a 20,000 s record at 10 Hz whose trend test fired with ``form``."""
+    n = 200_000
+    record = LoopRecord.single(np.zeros(n), {"temp_c": temp, "gz_dps": np.zeros(n)}, RATE)
+    config = LoopConfig(rate=RATE, sensor="gyro", units="deg/s")
+    roles = channel_roles(["temp_c", "gz_dps"], "gyro")
+    return Offer([_finding("trend", True, form=form, tau_s=50.0)], record,
+                 (slice(0, n // 2),), roles, config, CandidateFamily(5), (1.0,))
+
+
+def test_a_driver_that_follows_time_leaves_the_trend_out():
+    t = np.arange(200_000) / RATE
+    ramp = 5 + 1e-3 * t + 0.01 * np.random.default_rng(0).standard_normal(t.size)
+    wave = np.sin(2 * np.pi * t / 2000.0)  # slow, but no line in time
+    record = LoopRecord.single(np.zeros(t.size), {"ramp": ramp, "wave": wave}, RATE)
+    fit = (slice(0, 100_000),)
+    assert follows_time(record, fit, "ramp", 200) == pytest.approx(1, abs=1e-3)
+    assert follows_time(record, fit, "wave", 200) is None
+    # too few blocks to tell a line from chance: a short record's driver never follows time
+    assert follows_time(record, (slice(0, 10_000),), "ramp", 200) is None
+    # the warm-up alone where the temperature follows time; nothing for a line in time
+    (drift,) = Drift.offered(_sweep_offer(ramp, "linear+exponential"))
+    assert not drift.trend and drift.follower == "temp_c"
+    assert drift.describe() == ("drift (warm-up, tau 50 s; no trend: temp_c follows time in "
+                                "the fitting data)")
+    assert list(CandidateFamily(5).add(drift, record).columns) == ["exp(-t/50s)"]
+    assert Drift.offered(_sweep_offer(ramp, "linear")) == []
+    (free,) = Drift.offered(_sweep_offer(wave, "linear"))
+    assert free.trend and free.describe() == "drift (trend and warm-up, tau 50 s)"
+    notes = trend_note(record, fit, channel_roles(["ramp", "wave"], "gyro"),
+                       LoopConfig(rate=RATE))
+    assert notes == ["ramp follows time in the fitting data (r = +1.00): a trend in time is "
+                     "not offered, since fitted there it could not be told from ramp and "
+                     "would run on where ramp holds still"]

@@ -43,6 +43,7 @@ from .config import LoopConfig
 from .diagnose import Finding
 from .driver_forms import still
 from .effects import CandidateFamily, Effect, Offer, effects_from
+from .effects.drift import trend_note
 from .findings import Diagnostics, residual
 from .fitting import Fitter, Judge
 from .intervals import Ratio, ratios
@@ -270,13 +271,15 @@ def notes(record: LoopRecord, diagnose: Diagnostics, family: CandidateFamily, ju
           reported: Plan, roles: Roles) -> list[str]:
     """Return what the report must say besides its tables.
 
-    Drivers that follow the slow residual but do not vary in the fitting segment, the
-    horizons left out and why, how the roles were told.
+    Drivers that follow the slow residual but do not vary in the fitting segment, those
+    that follow time there (no trend in time is offered), the horizons left out and why,
+    how the roles were told.
     """
     comp = family.compensation_series()
     target = record.y if comp is None else record.y - comp
     out = [text for ch in roles.slow if ch not in _driven(family)
            for text in [still(record, diagnose.forms, ch, target)] if text]
+    out += trend_note(record, diagnose.fit, roles, diagnose.config)
     out += [f"the {h:g} s horizon is not judged: {why}" for h, why in judged.skipped.items()]
     out += [f"the {h:g} s horizon is not reported: {why}" for h, why in reported.skipped.items()]
     if roles.companions:

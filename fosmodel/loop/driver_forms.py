@@ -374,6 +374,28 @@ def still(record: LoopRecord, forms: DriverForms, channel: str,
             f"output's at {rho:.2f} over the record)")
 
 
+def follows_time(record: LoopRecord, parts: Sequence[slice], channel: str,
+                 block: int) -> float | None:
+    """Return how ``channel`` correlates with time over ``parts``, if beyond chance; else None.
+
+    Its block means, each part's mean and time since its start removed, against that time;
+    "beyond chance" as :func:`still` reads it (Bartlett's variance for two autocorrelated
+    series, two-sided 1 %).  Over a steady sweep of the driver the two are one line: a
+    trend in time fitted there cannot be told from the driver, and would run on where the
+    driver holds still.
+    """
+    xs, ts = [], []
+    for x in block_means(record.channels[channel], parts, block):
+        t = np.arange(len(x), dtype=float)
+        xs.append(x - x.mean() if len(x) else x)
+        ts.append(t - t.mean() if len(t) else t)
+    x, t = np.concatenate(xs), np.concatenate(ts)
+    if len(x) < 10 or not np.any(x):
+        return None
+    rho = float(np.corrcoef(x, t)[0, 1])
+    return rho if abs(rho) >= _bartlett_bound(x, t) else None
+
+
 def _bartlett_bound(x: np.ndarray, y: np.ndarray, lags: int = 20) -> float:
     """Return the 1 % two-sided bound of a correlation between two autocorrelated series."""
     n = len(x)

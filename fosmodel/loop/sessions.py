@@ -50,6 +50,7 @@ from .config import LoopConfig
 from .diagnose import Finding
 from .driver_forms import refit_forms, still
 from .effects import CandidateFamily, Effect, Offer, effects_from
+from .effects.drift import trend_note
 from .findings import Diagnostics
 from .fitting import FamilyArrays, _holds
 from .intervals import Ratio, ratios
@@ -484,11 +485,16 @@ def _pool_scores(parts: list[Scores]) -> Scores:
 def _notes(record: LoopRecord, diagnose: Diagnostics, fitter: SessionFitter,
            family: CandidateFamily, roles: Roles, judged: list[Plan],
            names: tuple[str, ...]) -> list[str]:
-    """Drivers that follow the slow residual but do not vary where fitted; horizons left out."""
+    """Return the notes of the sessions' report.
+
+    Drivers that follow the slow residual but do not vary where fitted, or follow time
+    there; horizons left out.
+    """
     target = fitter.target(family)
     driven = set(channels_read([*family.compensation, *family.exog_lags]))
     out = [text for ch in roles.slow if ch not in driven
            for text in [still(record, diagnose.forms, ch, target)] if text]
+    out += trend_note(record, diagnose.fit, roles, diagnose.config)
     skipped = {h: why for p in judged for h, why in p.skipped.items()
                if "the sessions hold" in why}
     out += [f"the {h:g} s horizon is not judged: {why}" for h, why in skipped.items()]
