@@ -41,8 +41,8 @@ class Drift(Effect):
     def offered(cls, offer: Offer) -> list[Effect]:
         """Return the form and warm-up of a fired trend test.
 
-        Only the warm-up where a driver follows time: none where the form found has no
-        warm-up (a polynomial in time; a long warm-up is one too over the record).
+        Only the warm-up where a driver follows time, and nothing where the form found is
+        a polynomial in time alone.
         """
         found = offer.fired("trend")
         followers = time_followers(offer.record, offer.fit, offer.roles, offer.config) \
