@@ -437,7 +437,11 @@ def test_a_real_full_disk_and_a_real_read_only_folder(tmp_path, options, said):
 
 def test_ctrl_c_while_the_libraries_load_is_one_line(tmp_path):
     """Ctrl-C in the first seconds (numpy, pandas and scikit-learn loading) printed a traceback."""
-    pd.DataFrame({"time": np.arange(100) / 100.0, "gx": np.arange(100.0) % 7}).to_csv(
+    # a record the loop takes seconds over: a signal the loaded machine delivers late still
+    # lands in the command, not in the interpreter's shutdown after a quick refusal
+    n = 30_000
+    pd.DataFrame({"time": np.arange(n) / 100.0,
+                  "gx": np.random.default_rng(0).standard_normal(n)}).to_csv(
         tmp_path / "r.csv", index=False)
     argv = [sys.executable, "-X", "importtime", "-m", "fosmodel.cli", "close-loop",
             str(tmp_path / "r.csv"), "--column", "gx", "--out", str(tmp_path / "loop")]
