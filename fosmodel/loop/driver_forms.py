@@ -328,9 +328,10 @@ def forms_p(target: np.ndarray, columns: Mapping[str, np.ndarray], parts: Sequen
     k, j = len(columns), len(beside)
     if len(y) <= k + j + 2 or not np.any(y):
         return 1.0
-    sse = _sse(y, f)
+    residual = _residual(y, f)
+    sse = float(residual @ residual)
     sse0 = _sse(y, f[:, :j]) if j else float(y @ y)
-    dof = effective_samples(_residual(y, f)) - k - j - 1
+    dof = effective_samples(residual) - k - j - 1
     if dof <= 0:
         return 1.0
     if sse <= 0:
