@@ -385,12 +385,9 @@ def follows_time(record: LoopRecord, parts: Sequence[slice], channel: str,
     trend in time fitted there cannot be told from the driver, and would run on where the
     driver holds still.
     """
-    xs, ts = [], []
-    for x in block_means(record.channels[channel], parts, block):
-        t = np.arange(len(x), dtype=float)
-        xs.append(x - x.mean() if len(x) else x)
-        ts.append(t - t.mean() if len(t) else t)
-    x, t = np.concatenate(xs), np.concatenate(ts)
+    means = block_means(record.channels[channel], parts, block)
+    x = innovations(means, 0.0)  # each part less its mean
+    t = innovations([np.arange(len(m), dtype=float) for m in means], 0.0)
     if len(x) < 10 or not np.any(x):
         return None
     rho = float(np.corrcoef(x, t)[0, 1])
