@@ -29,6 +29,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ..core.exceptions import InputError
+from .compensation import compensation_series
 from .model import FOSModel
 
 
@@ -113,7 +114,8 @@ def session_constant(model: FOSModel, y: np.ndarray, exog: Mapping[str, np.ndarr
     head = {k: np.asarray(v)[:stop] for k, v in exog.items() if k not in levels} \
         if exog else None
     y = np.asarray(y[:stop], dtype=float)
-    comp = model._compensation(head, stop) if model.compensation else np.zeros(stop)
+    comp = (compensation_series(model.compensation, head, stop, model.rate)
+            if model.compensation else np.zeros(stop))
     target = (y - comp)[window]
     target = target[np.isfinite(target)]
     if not target.size:
