@@ -1,7 +1,9 @@
-"""Which of the candidates kept in a round goes in."""
+"""Which candidates are kept, and which of those kept in a round goes in."""
+
+from dataclasses import replace
 
 from fosmodel.loop.effects import make
-from fosmodel.loop.judge import Comparison, Judgement
+from fosmodel.loop.judge import Comparison, Judgement, verdict
 from fosmodel.loop.rounds import Trial, choose
 
 
@@ -39,3 +41,18 @@ def test_the_kept_are_ranked_over_the_origins_that_judged_them_all():
     pooled = Judgement(level.judgement.last, (), None, "outage_1800s")
     ahead = _trial(make("drift", tau_s=100.0), 0.5, [0.99, 0.99, 0.99])
     assert pooled.judged_from() == {0} and ahead.judgement.score([0])[0] == 0.5
+
+
+def test_a_function_of_time_is_not_kept_on_what_only_its_next_stretch_judged():
+    """A step after every earlier origin, whose 30 min outages are too few to judge by halves:
+    the evaluation right after its data is its only judge, and a stale constant passes there."""
+    step = make("step", time_s=36_715.0)
+    last = (Comparison("one_step", None, 10, 0.0, (0.003, -0.002), 0.1, 2.0, 0.016, 0.57),
+            Comparison("outage", 300.0, 57, 0.126, (0.411, -1.047), 0.5, 4.0, 9e-5, 0.78),
+            Comparison("outage", 1800.0, 9, 0.531, None, 0.9, 3.5, 0.0046, 0.87))
+    assert verdict(last, None, 0.01, step.strict) == "outage_1800s"  # at the end alone
+    assert verdict(last, [], 0.01, step.strict) is None  # and no earlier origin judged it
+    judged = tuple(replace(c, gain=0.4) for c in last)
+    assert verdict(last, [judged], 0.01, step.strict) == "outage_1800s"
+    # a level holds still beyond its data: it needs no judge further away
+    assert verdict(last, [], 0.01, make("level", taus=(10.0,)).strict) == "outage_1800s"

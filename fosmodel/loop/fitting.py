@@ -211,7 +211,7 @@ class Judge:
         """
         alpha = self.fitter.config.accept_alpha
         last = compare(self.current[-1], self._forecasts(trial))
-        if verdict(last, [], alpha, effect.strict) is None:
+        if verdict(last, None, alpha, effect.strict) is None:
             return Judgement(last, self.origins_s, None, None)
         found = [self._earlier(trial, family, o, m, f) for o, m, f in
                  zip(self.origins[:-1], self.refits[:-1], self.current[:-1])]

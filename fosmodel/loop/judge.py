@@ -302,7 +302,7 @@ class Judgement:
                     {c.key: c.to_dict() for c in each} for each in self.sessions]})}
 
 
-def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]],
+def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]] | None,
             alpha: float, strict: bool = True) -> str | None:
     """Return the key of the comparison a candidate is kept on, or None.
 
@@ -314,6 +314,11 @@ def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]],
     ``-GAIN_TOL``); the others (a level, which holds still beyond its data; a driver's slow
     part, which runs as its measured cause does) need only a positive gain on average over
     the origins.  Of several comparisons passed, the one with the largest such gain.
+
+    A strict candidate is not kept on a comparison judged only next to its fitting data: one
+    whose halves are not judged (too few windows) and that no earlier origin judged (a step
+    after every earlier origin).  ``earlier`` None: the earlier origins are not looked at
+    yet, and nothing is asked of them.
     """
     if any(c.loses(alpha) for c in last):
         return None
@@ -321,9 +326,11 @@ def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]],
     for c in last:
         if not c.passes(alpha, strict):
             continue
-        gains = [e.gain for cs in earlier for e in cs if e.key == c.key]
+        gains = [e.gain for cs in earlier or [] for e in cs if e.key == c.key]
         if strict and any(g < -GAIN_TOL for g in gains):
             continue
+        if strict and earlier is not None and c.halves is None and not gains:
+            continue  # judged only right after its data, as a stale constant would be
         mean = float(np.mean([*gains, c.gain]))
         if mean > 0:
             kept.append((mean, c.key))
