@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy import stats
 from scipy.signal import lfilter, lombscargle
 
 from fosmodel.core.fos import fos
@@ -266,3 +267,25 @@ def test_finding_serialises():
     d = f.to_dict()
     assert set(d) == {"test", "statistic", "p_value", "alpha", "fired", "evidence"}
     assert d["fired"] is False and isinstance(d["p_value"], float)
+
+
+def test_change_point_does_not_take_a_wander_for_a_step():
+    """The residual a level leaves beside it: white noise and a Gauss-Markov wander of 30
+    samples.  A kernel long-run variance over 15 lags misses the wander and fired on 25 of
+    these 50 records at 0.001; batch means see it, and a true step still fires."""
+    n, t = 6000, _time(6000)
+    fired = 0
+    for seed in range(50):
+        rng = np.random.default_rng(500 + seed)
+        x = rng.standard_normal(n) + lfilter([0.3], [1, -np.exp(-1 / 30)], rng.standard_normal(n))
+        fired += dg.change_point(x, t).fired
+        if seed == 0:
+            stepped = dg.change_point(x + 3.0 * (t >= 40.0), t)
+            assert stepped.fired and stepped.evidence["time_s"] == pytest.approx(40.0, abs=0.5)
+    assert fired <= 1
+
+
+def test_the_step_test_p_value_counts_the_variance_estimate():
+    """With the long-run variance from 30 batches the tail is wider than Kolmogorov's."""
+    assert dg._bridge_sf(1.95, 29) > stats.kstwobign.sf(1.95)
+    assert dg._bridge_sf(1.95, 10**6) == pytest.approx(stats.kstwobign.sf(1.95), rel=1e-3)

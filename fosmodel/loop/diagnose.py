@@ -16,7 +16,7 @@ aux            cross-correlation with each other channel and its square,       a
                lags 0..K, Bartlett variance
 nonlinear      F test of lagged-output squares and cross-products (RESET)      nonlinear
 trend          F test of a polynomial / exponential warm-up in time            drift
-step           CUSUM against the Brownian bridge (Kolmogorov), long-run var    step
+step           CUSUM against the Brownian bridge, batch-means long-run var     step
 allan          Allan deviation at long tau over its white-noise value (chi2)   (nothing)
 =============  ==============================================================  ============
 """
@@ -41,6 +41,10 @@ ALPHA = 1e-3
 BLOCKED_ROWS = 2**21
 BLOCK = 2**16
 ZOOM_BLOCK = 2**20  # samples per chirp z-transform of a long residual (refine_frequency)
+#: Batches of the residual whose means give the step test's long-run variance: enough for an
+#: estimate with 29 degrees of freedom (Schmeiser 1982's 10 to 30), few enough that each is
+#: longer than the wander a level leaves (48 min batches over a day at 1 Hz).
+STEP_BATCHES = 30
 #: Most values of a finding's figure arrays: a figure shows no more, and record-long arrays
 #: kept in every finding would hold gigabytes of a day's residual.
 PLOT_POINTS = 20_000
@@ -523,26 +527,61 @@ def _centred(x: np.ndarray) -> np.ndarray:
 def change_point(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Finding:
     """CUSUM test for a shift of the mean, against the supremum of a Brownian bridge.
 
-    ``D = max |S_k| / (sigma_LR sqrt(N))`` with the long-run variance from a
-    Bartlett kernel (Newey-West bandwidth), so a mildly coloured residual does
-    not fire it; the shift is placed where a single mean change fits best.
+    ``D = max |S_k| / (sigma_LR sqrt(N))``; the shift is placed where a single mean
+    change fits best.  The long-run variance is that of :data:`STEP_BATCHES` batch means
+    of the residual less that shift.  A wander slower than a few dozen samples (bias
+    instability a level leaves beside it) raises the CUSUM as a step does, and a kernel
+    estimate over that many lags does not see it: a synthetic day of a static accelerometer
+    at 1 Hz with no step read ``D`` 7.0 (p 2e-43) with Newey-West's bandwidth, 1.9 with
+    batch means.  With the shift taken out first, a true step does not inflate the variance
+    it is judged against, which would cost the test its power (Vogelsang 1999).
+
+    References
+    ----------
+    B. Schmeiser, "Batch size effects in the analysis of simulation output", *Operations
+    Research* 30(3), 1982.
+    T. J. Vogelsang, "Sources of nonmonotonic power when testing for a shift in mean of a
+    dynamic time series", *Journal of Econometrics* 88(2), 1999.
     """
     n = len(residual)
     r = residual - residual.mean()
     cusum = np.cumsum(r)
-    bandwidth = int(4 * (n / 100) ** (2 / 9))
-    gamma = [float(r[k:] @ r[: n - k]) / n for k in range(bandwidth + 1)]
-    lrv = gamma[0] + 2 * sum((1 - k / (bandwidth + 1)) * gamma[k] for k in range(1, bandwidth + 1))
-    d = float(np.max(np.abs(cusum)) / math.sqrt(max(lrv, 1e-300) * n))
     k = np.arange(1, n)
     split = int(k[np.argmax(np.abs(cusum[:-1]) / np.sqrt(k * (n - k) / n))])
     shift = float(residual[split:].mean() - residual[:split].mean())
+    lrv, batches = _batch_variance(np.r_[r[:split] - r[:split].mean(),
+                                         r[split:] - r[split:].mean()])
+    d = float(np.max(np.abs(cusum)) / math.sqrt(max(lrv, 1e-300) * n))
     rss0 = float(r @ r)
     reduction = cusum[split - 1] ** 2 * n / (split * (n - split))  # of a single mean shift
     bic_gain = n * math.log(rss0 / (rss0 - reduction)) - 2 * math.log(n)  # shift and time
-    return Finding("step", d, float(stats.kstwobign.sf(d)), alpha,
+    return Finding("step", d, _bridge_sf(d, batches - 1), alpha,
                    {"time_s": float(time[split]), "shift": shift, "bic_gain": float(bic_gain)},
                    {"time": thinned(time), "cusum": thinned(cusum)})
+
+
+def _batch_variance(x: np.ndarray) -> tuple[float, int]:
+    """Return the long-run variance of the centred ``x`` by batch means, and the batches.
+
+    ``b * sum(m^2) / (B - 1)`` over the means ``m`` of ``B`` = :data:`STEP_BATCHES` batches
+    of ``b`` samples (fewer batches, of two samples at least, when ``x`` is short).
+    """
+    batches = max(2, min(STEP_BATCHES, len(x) // 2))
+    b = len(x) // batches
+    means = x[: b * batches].reshape(batches, b).mean(axis=1)
+    return b * float(means @ means) / (batches - 1), batches
+
+
+def _bridge_sf(d: float, dof: int, nodes: int = 400) -> float:
+    """Return ``P(sup |B(t)| > d sqrt(V))``, ``B`` a Brownian bridge, ``V ~ chi2(dof) / dof``.
+
+    The Kolmogorov tail with the long-run variance estimated from ``dof + 1`` batches, as
+    Student's t is the normal's with an estimated variance: averaged over ``V``'s quantiles
+    at ``nodes`` midpoints.  With 30 batches of white noise, 0.25 % of 400 records fired at
+    0.001 and 1.5 % at 0.01; with the Kolmogorov tail alone, 0.75 % and 4.5 %.
+    """
+    v = stats.chi2.ppf((np.arange(nodes) + 0.5) / nodes, dof) / dof
+    return float(np.mean(stats.kstwobign.sf(d * np.sqrt(v))))
 
 
 def allan(residual: np.ndarray, rate: float, alpha: float = ALPHA) -> Finding:
