@@ -243,28 +243,30 @@ def test_close_loop_finds_an_undeclared_temperature_effect(tmp_path, capsys):
                                rtol=1e-9, atol=1e-9)
 
 
-def test_close_loop_takes_a_companion_as_an_input_only_when_asked(tmp_path, capsys):
+# another gyro axis, and a magnetometer's axis: both measure the motion in use
+@pytest.mark.parametrize("other", ["gy_dps", "mag_x"])
+def test_close_loop_takes_a_companion_as_an_input_only_when_asked(other, tmp_path, capsys):
     rng = np.random.default_rng(3)
     n, rate = 30_000, 100.0
     gy = rng.standard_normal(n)
     gx = 0.05 * rng.standard_normal(n) + 0.02 * np.r_[0.0, gy[:-1]]
     rec = tmp_path / "imu.csv"
-    pd.DataFrame({"time": np.arange(n) / rate, "gx_dps": gx, "gy_dps": gy}).to_csv(rec,
-                                                                                  index=False)
+    pd.DataFrame({"time": np.arange(n) / rate, "gx_dps": gx, other: gy}).to_csv(rec,
+                                                                               index=False)
     runs = {}
-    for name, extra in (("default", []), ("asked", ["--aux", "gy_dps"])):
+    for name, extra in (("default", []), ("asked", ["--aux", other])):
         js = tmp_path / f"{name}.json"
         code, stdout, err = _run(["close-loop", rec, "--column", "gx_dps", "--units", "deg/s",
                                   "--out", tmp_path / name, "--json", js, *extra], capsys)
         assert code == 0, err
         runs[name] = json.loads(js.read_text())
     default, asked = runs["default"], runs["asked"]
-    assert default["effects"] == [] and default["roles"]["companions"] == ["gy_dps"]
+    assert default["effects"] == [] and default["roles"]["companions"] == [other]
     (noise,) = default["cross_axis"]
-    assert noise["channel"] == "gy_dps" and noise["lag"] == 1 and noise["fired"]
-    assert [(e["kind"], e["channel"]) for e in asked["effects"]] == [("companion", "gy_dps")]
+    assert noise["channel"] == other and noise["lag"] == 1 and noise["fired"]
+    assert [(e["kind"], e["channel"]) for e in asked["effects"]] == [("companion", other)]
     report = (tmp_path / "asked" / "report.md").read_text()
-    assert "companion gy_dps as an input, as asked" in report
+    assert f"companion {other} as an input, as asked" in report
     assert "taken as an input as asked" in report
 
 

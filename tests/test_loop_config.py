@@ -9,6 +9,7 @@ import pytest
 from fosmodel.core.exceptions import InputError, OptionError
 from fosmodel.loop.config import HORIZONS_S, LoopConfig
 from fosmodel.loop.roles import channel_roles
+from fosmodel.noise.axes import motion_kind
 
 
 @pytest.mark.parametrize("options, message", [
@@ -83,6 +84,33 @@ def test_the_other_axes_of_the_same_kind_are_companions(sensor, expected):
     roles = channel_roles(channels, sensor)
     assert (roles.drivers, roles.companions) == expected and roles.opted_in == ()
     assert roles.inputs == roles.drivers and roles.slow == ("temp_c", "vbat")
+
+
+@pytest.mark.parametrize("name, kind", [
+    ("mx", "magnetometer"), ("mag_x", "magnetometer"), ("Mag Y", "magnetometer"),
+    ("magnetic_field.z", "magnetometer"), ("roll_deg", "attitude"), ("heading", "attitude"),
+    ("q0", "attitude"), ("quat_w", "attitude"), ("vx", "velocity"), ("vel_n", "velocity"),
+    ("pos_x", "position"), ("lat", "position"), ("alt_m", "position"),
+    ("temp_c", None), ("vbat", None), ("voltage", None), ("max", None), ("mode", None),
+    ("alternator", None), ("pressure", None), ("gx_dps", None),
+])
+def test_names_that_say_a_channel_measures_the_motion(name, kind):
+    assert motion_kind(name) == kind
+
+
+def test_channels_that_measure_the_motion_are_companions_however_the_others_are_told():
+    names = ["temp_c", "gy_dps", "ax_g", "mag_x", "mag_y", "roll", "vbat"]
+    named = channel_roles(names, "gyro")
+    assert named.drivers == ("temp_c", "ax_g", "vbat")
+    assert named.companions == ("gy_dps", "mag_x", "mag_y", "roll")
+    assert named.told == ("the other gyro axes, recognised by their names; mag_x, mag_y, roll "
+                          "measure the motion, as named")
+    given = channel_roles(names, "gyro", companions=["gy_dps"], aux=["mag_x"])
+    assert given.companions == ("gy_dps", "mag_x", "mag_y", "roll")
+    assert given.inputs == ("temp_c", "ax_g", "vbat", "mag_x")
+    unknown = channel_roles(["temp_c", "gx", "mx"], None)
+    assert unknown.drivers == ("temp_c",) and unknown.companions == ("gx", "mx")
+    assert unknown.told.endswith("; mx measures the motion, as named")
 
 
 def test_companions_given_or_told_by_the_file_and_taken_in_only_when_asked():

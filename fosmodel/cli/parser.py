@@ -123,9 +123,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_loader_options(loop, contiguous="the residual loop")
     loop.add_argument("--aux", type=name_list, metavar="COL[,COL...]",
                       help="companions to take as inputs all the same: other axes of the same "
-                           "IMU and kind, which measure the motion in use (default: none; every "
-                           "other column is read, the other axes as cross-axis noise, the rest "
-                           "as drivers)")
+                           "IMU and kind, and columns named as a magnetometer, attitude, "
+                           "velocity or position, which measure the motion in use (default: "
+                           "none; every other column is read, the companions as cross-axis "
+                           "noise, the rest as drivers)")
     loop.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS",
                       help="units of the column (deg/s, or gx=deg/s), which tell the sensor, "
                            "for position errors (default: from the column's name, e.g. gz_dps; "

@@ -184,7 +184,8 @@ def close_loop(
     channels : mapping of str to array-like, optional
         Other columns of the record, each as long as ``y``: drivers that may explain the
         residual (temperature, another sensor's specific force) and companions (the other
-        axes of the same IMU and kind), told apart by :func:`fosmodel.loop.roles.channel_roles`.
+        axes of the same IMU and kind, channels that measure the motion), told apart by
+        :func:`fosmodel.loop.roles.channel_roles`.
     config : LoopConfig
     progress : callable, optional
         Called with a line of text as each model is fitted and each effect tried.

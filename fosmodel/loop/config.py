@@ -64,7 +64,9 @@ class LoopConfig:
         fitting segment (:func:`fosmodel.core.levels.level_grid`).
     companions : tuple of str, optional
         The channels that are other axes of the same IMU and kind as the modelled one;
-        by default recognised from the names (:mod:`fosmodel.loop.roles`).
+        by default recognised from the names (:mod:`fosmodel.loop.roles`).  Channels named
+        as measuring the motion (a magnetometer, attitude, velocity, position) are
+        companions whatever this says.
     aux : tuple of str
         Companions taken as inputs all the same (by default none is).
     confidence : float

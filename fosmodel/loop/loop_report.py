@@ -156,8 +156,9 @@ def _cross_axis_text(result: LoopResult) -> str:
     rows = [f"{c['channel']} {c['rho']:+.3f} at lag {c['lag']} (p {c['p_value']:.2g}"
             + (", taken as an input as asked" if c["as_input"] else "") + ")"
             for c in result.cross_axis]
-    return ("The other axes of the same IMU and kind are companions: never inputs unless "
-            "asked for. Their largest correlation with the final model's residual on the "
+    return ("The other axes of the same IMU and kind, and the channels named as measuring "
+            "the motion, are companions: never inputs unless asked for. Their largest "
+            "correlation with the final model's residual on the "
             "fitting segment (lags 0-" + f"{result.config.aux_max_lag}): " + "; ".join(rows) + ".")
 
 

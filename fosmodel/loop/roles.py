@@ -7,7 +7,11 @@ for a gyro, an accelerometer for an accelerometer) are *companions*: never
 inputs unless asked for (``LoopConfig.aux``); their correlation with the
 residual is reported as cross-axis noise.  So are the gyros of an
 accelerometer: angular rate measures the motion too, and no error of an
-accelerometer is driven by what a gyro reads.  Everything else is a *driver*, a
+accelerometer is driven by what a gyro reads.  So are the channels whose names say
+they measure the motion itself (:func:`fosmodel.noise.axes.motion_kind`): a
+magnetometer reads the heading, and attitude, velocity and position follow the
+vehicle, however well one tracked a static record's slow bias (a magnetometer
+drifts with the die temperature too).  Everything else is a *driver*, a
 cause of the error measured in use: a temperature, a voltage, and the
 accelerometers for a gyro (its g-sensitivity: specific force).  Axes are recognised as the
 six-axis workflow recognises them (:func:`fosmodel.noise.axes.infer_axis`),
@@ -21,7 +25,7 @@ from dataclasses import dataclass
 
 from ..core.exceptions import OptionError
 from ..core.validation import did_you_mean
-from ..noise.axes import infer_axis
+from ..noise.axes import infer_axis, motion_kind
 
 
 @dataclass(frozen=True)
@@ -110,6 +114,11 @@ def channel_roles(channels: Iterable[str], sensor: str | None,
         gyros = [c for c in names if c not in found and sensor_of(c) == "gyro"]
         found += gyros
         told += " (and the gyros, which measure the motion)" if gyros else ""
+    moving = [c for c in names if c not in found and sensor_of(c) is None and motion_kind(c)]
+    if moving:
+        found += moving
+        told += (f"; {', '.join(moving)} "
+                 f"{'measure' if len(moving) > 1 else 'measures'} the motion, as named")
     _among(aux, names, "aux")
     stray = [c for c in aux if c not in found]
     if stray:

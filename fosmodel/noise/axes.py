@@ -41,6 +41,22 @@ _UNIT_WORDS = {
               "m_s_2": "m/s^2"},
 }
 
+#: Channels that measure the motion itself, by the names they begin with: a magnetometer's
+#: axes (``mx``, ``mag_x``) read the heading, the others how the body is turned, moves or
+#: where it is.  The one-letter prefixes only right before the axis letter.
+_MOTION_AXES = {
+    "magnetometer": ("magnetometer", "magnetic_field", "mag", "m"),
+    "velocity": ("velocity", "vel", "v"),
+    "position": ("position", "pos"),
+}
+#: The same, as whole words a name begins with (``roll_deg``, ``q0``, ``alt_m``).
+_MOTION_WORDS = {
+    "attitude": ("attitude", "orientation", "euler", "quaternion", "quat", "roll", "pitch",
+                 "yaw", "heading", "q0", "q1", "q2", "q3", "qw", "qx", "qy", "qz"),
+    "velocity": ("velocity",),
+    "position": ("position", "latitude", "longitude", "altitude", "lat", "lon", "alt"),
+}
+
 
 @dataclass(frozen=True)
 class Axis:
@@ -142,6 +158,27 @@ def infer_axis(column: str) -> tuple[str | None, str | None]:
             if rest is not None:
                 return sensor, _units_in(sensor, rest)
     return None, None
+
+
+def motion_kind(column: str) -> str | None:
+    """Tell what of the motion a column's name says it measures, or None.
+
+    ``"magnetometer"``, ``"attitude"``, ``"velocity"`` or ``"position"``: in use such a
+    channel follows the vehicle, so it is no cause of an inertial sensor's error.
+
+    Examples
+    --------
+    >>> motion_kind("mag_x"), motion_kind("roll_deg"), motion_kind("vbat"), motion_kind("temp")
+    ('magnetometer', 'attitude', None, None)
+    """
+    name = column.strip().lower()
+    for kind, prefixes in _MOTION_AXES.items():
+        if any(_after_prefix(name, prefix) is not None for prefix in prefixes):
+            return kind
+    for kind, words in _MOTION_WORDS.items():
+        if any(re.match(rf"{word}(?![a-z])", name) for word in words):
+            return kind
+    return None
 
 
 def _after_prefix(name: str, prefix: str) -> str | None:
