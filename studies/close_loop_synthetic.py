@@ -1,7 +1,7 @@
 """The residual loop on synthetic records with undeclared effects: the tables of the documentation
 (docs/pages/loop.md).
 
-Three parts, each a section of the page:
+Four parts, each a section of the page:
 
 * ``close-loop-synthetic``: every short loop scenario of data_synth on seeds 0-9
   (controls: 0-19): the 5-minute records with one undeclared effect each (two at
@@ -19,6 +19,9 @@ Three parts, each a section of the page:
   temperature named, the 30 min outage bias RMS of the prediction segment (of every
   session's predicted part, pooled) against the starting model with the level alone,
   and their controls (no temperature effect, the same draws), seeds 0-19.
+* ``close-loop-axes``: every axis of the three-day record, each day alone and the three
+  together, seeds 0-9: the temperature named (on the four axes it does not drive, a false
+  driver) and the runs with any ratio worse on prediction.
 * ``close-loop-companions``: six axes whose noise is correlated across the gyros and
   across the accelerometers (``companion_noise``): the other axes of each one's kind
   are never inputs, and their correlation with the residual is reported beside the
@@ -26,9 +29,9 @@ Three parts, each a section of the page:
 
 Full reports for seed 0 go to ``studies/results/close_loop/<record>/``.
 
-Run: ``python studies/close_loop_synthetic.py [--jobs N] [--parts synthetic,sweeps,companions]``
-(about half an hour on 2 workers); ``--parts`` runs those parts only and rewrites only their
-sections.
+Run: ``python studies/close_loop_synthetic.py [--jobs N] [--parts PART,...]`` (the parts:
+synthetic, sweeps, axes, companions); ``--parts`` runs those parts only and rewrites only
+their sections.
 """
 
 from __future__ import annotations
@@ -89,6 +92,11 @@ SWEEPS = [("one day, gx_dps", "temperature_sweep", "gx_dps", None),
           ("day 3 of three alone, ax_mps2", "temperature_sessions", "ax_mps2", 3)]
 SWEEP_CONTROLS = [("one day, control", "temperature_sweep_control", "gx_dps", None),
                   ("three days, control", "temperature_sessions_control", "gx_dps", None)]
+#: Every axis of the three-day record, each day looped alone and the three together: the
+#: axes no temperature drives (gy, gz, ay, az) are controls drawn with the driven ones.
+AXES_RUNS = [("day 1 alone", 1), ("day 2 alone", 2), ("day 3 alone", 3), ("three days", None)]
+AXES = ("gx_dps", "gy_dps", "gz_dps", "ax_mps2", "ay_mps2", "az_mps2")
+DRIVEN = ("gx_dps", "ax_mps2")
 UNITS = {"g": ("gyro", "deg/s"), "a": ("accel", "m/s^2")}
 
 
@@ -242,6 +250,25 @@ def sweep_seed(label: str, scenario: str, column: str, day: int | None,
     return out
 
 
+def axis_seed(day: int | None, column: str, seed: int) -> dict[str, Any]:
+    """One axis of the three-day record, one day alone or all three: the temperature named,
+    and what came out worse on prediction (pooled, or in any one session)."""
+    sessions = make_sessions("temperature_sessions", seed=seed)
+    config = _config(column, sessions[0].rate)
+    if day is None:
+        res: Any = close_sessions([Session(r.columns[column], {k: v for k, v in r.columns.items()
+                                                                if k != column}, f"day {i + 1}")
+                                   for i, r in enumerate(sessions)], config)
+        worse = [*res.worse(), *(w for k in range(len(sessions)) for w in res.worse_in(k))]
+    else:
+        rec = sessions[day - 1]
+        res = close_loop(rec.columns[column], {k: v for k, v in rec.columns.items()
+                                               if k != column}, config)
+        worse = res.worse()
+    return {"named": any(s.effect.kind == "driver" and getattr(s.effect, "channel", "")
+                         == "temp_c" for s in res.steps), "worse": sorted(set(worse))}
+
+
 # -- companions ---------------------------------------------------------------------------------
 
 
@@ -295,6 +322,9 @@ def _tasks(parts: list[str]) -> list[tuple]:
         tasks += [(("sweep", label, seed), sweep_seed, (label, scenario, column, day, seed))
                   for label, scenario, column, day in [*SWEEPS, *SWEEP_CONTROLS]
                   for seed in (CONTROL_SEEDS if "control" in scenario else SEEDS)]
+    if "axes" in parts:
+        tasks += [(("axis", label, column, seed), axis_seed, (day, column, seed))
+                  for label, day in AXES_RUNS for column in AXES for seed in SEEDS]
     return tasks
 
 
@@ -356,6 +386,28 @@ def sweeps_section(done: dict) -> dict[str, list[dict[str, Any]]]:
     return {"sweeps": sweeps, "sweep_controls": sweep_controls}
 
 
+def axes_section(done: dict) -> dict[str, list[dict[str, Any]]]:
+    """Every axis of the three-day record, into the page: named, and worse on prediction."""
+    rows = []
+    for label, _ in AXES_RUNS:
+        row: dict[str, Any] = {"Run": label}
+        for column in AXES:
+            seeds = [done["axis", label, column, s] for s in SEEDS]
+            named = sum(s["named"] for s in seeds)
+            worse = sum(bool(s["worse"]) for s in seeds)
+            row[column + (" (driven)" if column in DRIVEN else "")] = (
+                f"{named}/{len(SEEDS)} named, {worse} worse")
+        rows.append(row)
+    worse = [(label, column, seed, w) for label, _ in AXES_RUNS for column in AXES
+             for seed in SEEDS for w in done["axis", label, column, seed]["worse"]]
+    replace_section("close-loop-axes", "\n".join([
+        markdown_table(pd.DataFrame(rows)), "",
+        "Worse on prediction, each ratio whose interval lies above 1: " + ("; ".join(
+            f"{label}, {column}, seed {seed}: {w}" for label, column, seed, w in worse)
+            or "none") + "."]))
+    return {"axes": rows}
+
+
 def companions_section(_: dict) -> dict[str, list[dict[str, Any]]]:
     """The companions' table, into the page."""
     companions = companion_rows()
@@ -366,7 +418,7 @@ def companions_section(_: dict) -> dict[str, list[dict[str, Any]]]:
 
 
 SECTIONS = {"synthetic": synthetic_section, "sweeps": sweeps_section,
-            "companions": companions_section}
+            "axes": axes_section, "companions": companions_section}
 
 
 def main() -> None:
