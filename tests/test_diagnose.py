@@ -289,3 +289,14 @@ def test_the_step_test_p_value_counts_the_variance_estimate():
     """With the long-run variance from 30 batches the tail is wider than Kolmogorov's."""
     assert dg._bridge_sf(1.95, 29) > stats.kstwobign.sf(1.95)
     assert dg._bridge_sf(1.95, 10**6) == pytest.approx(stats.kstwobign.sf(1.95), rel=1e-3)
+
+
+def test_mean_stability_fires_on_a_wandering_mean_and_not_on_white_noise():
+    """The level's test: a random walk under white noise wanders; white noise does not."""
+    n, t = 10000, _time(10000)
+    walk = np.cumsum(0.01 * _white(n, 9)) + _white(n, 10)
+    found = dg.mean_stability(walk, t)
+    assert found.test == "wander" and found.fired
+    fired = sum(dg.mean_stability(_white(3000, 300 + seed), _time(3000), alpha=0.05).fired
+                for seed in range(100))
+    assert fired <= _false_alarm_bound(100, 0.05)

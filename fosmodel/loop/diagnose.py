@@ -16,7 +16,8 @@ aux            cross-correlation with each other channel and its square,       a
                lags 0..K, Bartlett variance
 nonlinear      F test of lagged-output squares and cross-products (RESET)      nonlinear
 trend          F test of a polynomial / exponential warm-up in time            drift
-step           CUSUM against the Brownian bridge, batch-means long-run var     step
+wander         CUSUM against the Brownian bridge, Newey-West long-run var      level
+step           the same CUSUM, batch-means long-run variance less the shift    step
 allan          Allan deviation at long tau over its white-noise value (chi2)   (nothing)
 =============  ==============================================================  ============
 """
@@ -524,6 +525,31 @@ def _centred(x: np.ndarray) -> np.ndarray:
     return x - x.mean()
 
 
+def mean_stability(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Finding:
+    """CUSUM test of a stable mean against a wandering one: evidence of a level.
+
+    ``D = max |S_k| / (sigma_LR sqrt(N))`` against the supremum of a Brownian bridge, the
+    long-run variance from a Bartlett kernel over a Newey-West bandwidth of a few dozen
+    lags: a mildly coloured residual does not fire it, a mean that wanders over minutes,
+    a random walk's or a step's, does (the KPSS idea, Kwiatkowski et al. 1992, with
+    Kolmogorov's tail for its supremum).  Which of the two it is the step test says.
+
+    References
+    ----------
+    D. Kwiatkowski, P. C. B. Phillips, P. Schmidt and Y. Shin, "Testing the null hypothesis
+    of stationarity against the alternative of a unit root", *Journal of Econometrics*
+    54, 1992.
+    """
+    n = len(residual)
+    r = residual - residual.mean()
+    cusum = np.cumsum(r)
+    bandwidth = int(4 * (n / 100) ** (2 / 9))
+    gamma = [float(r[k:] @ r[: n - k]) / n for k in range(bandwidth + 1)]
+    lrv = gamma[0] + 2 * sum((1 - k / (bandwidth + 1)) * gamma[k] for k in range(1, bandwidth + 1))
+    d = float(np.max(np.abs(cusum)) / math.sqrt(max(lrv, 1e-300) * n))
+    return Finding("wander", d, float(stats.kstwobign.sf(d)), alpha, {"bandwidth": bandwidth})
+
+
 def change_point(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Finding:
     """CUSUM test for a shift of the mean, against the supremum of a Brownian bridge.
 
@@ -531,10 +557,11 @@ def change_point(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -
     change fits best.  The long-run variance is that of :data:`STEP_BATCHES` batch means
     of the residual less that shift.  A wander slower than a few dozen samples (bias
     instability a level leaves beside it) raises the CUSUM as a step does, and a kernel
-    estimate over that many lags does not see it: a synthetic day of a static accelerometer
-    at 1 Hz with no step read ``D`` 7.0 (p 2e-43) with Newey-West's bandwidth, 1.9 with
-    batch means.  With the shift taken out first, a true step does not inflate the variance
-    it is judged against, which would cost the test its power (Vogelsang 1999).
+    estimate over that many lags does not see it (:func:`mean_stability`, which the level
+    answers): a synthetic day of a static accelerometer at 1 Hz with no step read ``D`` 7.0
+    (p 2e-43) with Newey-West's bandwidth, 1.9 with batch means.  With the shift taken
+    out first, a true step does not inflate the variance it is judged against, which
+    would cost the test its power (Vogelsang 1999).
 
     References
     ----------

@@ -248,6 +248,7 @@ def describe_finding(finding: Finding) -> str:
              "nonlinear": lambda: f" ({e['strongest']})",
              "trend": lambda: f" ({e['form']})",
              "step": lambda: f" at {e['time_s']:.4g} s",
+             "wander": lambda: " (of the mean)",
              "allan": lambda: f" (tau {e['tau_max_s']:.3g} s)",
              "whiteness": lambda: f" (lags 1-{e['lags']})"}
     return finding.test + where.get(finding.test, str)()

@@ -34,7 +34,7 @@ from ..roles import Roles
 from .family import CandidateFamily
 
 #: Tests whose firing points to a slow error.
-SLOW_TESTS = ("trend", "step", "allan")
+SLOW_TESTS = ("trend", "wander", "step", "allan")
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,7 @@ class Offer:
 
     @property
     def slow(self) -> list[Finding]:
-        """The slow tests that fired (a trend, a step, the Allan deviation)."""
+        """The slow tests that fired (a trend, a wandering mean, a step, the Allan deviation)."""
         return self.fired(*SLOW_TESTS)
 
 
