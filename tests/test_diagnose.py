@@ -293,10 +293,10 @@ def test_the_step_test_p_value_counts_the_variance_estimate():
 
 def test_mean_stability_fires_on_a_wandering_mean_and_not_on_white_noise():
     """The level's test: a random walk under white noise wanders; white noise does not."""
-    n, t = 10000, _time(10000)
+    n = 10000
     walk = np.cumsum(0.01 * _white(n, 9)) + _white(n, 10)
-    found = dg.mean_stability(walk, t)
+    found = dg.mean_stability(walk)
     assert found.test == "wander" and found.fired
-    fired = sum(dg.mean_stability(_white(3000, 300 + seed), _time(3000), alpha=0.05).fired
+    fired = sum(dg.mean_stability(_white(3000, 300 + seed), alpha=0.05).fired
                 for seed in range(100))
     assert fired <= _false_alarm_bound(100, 0.05)

@@ -525,7 +525,7 @@ def _centred(x: np.ndarray) -> np.ndarray:
     return x - x.mean()
 
 
-def mean_stability(residual: np.ndarray, time: np.ndarray, alpha: float = ALPHA) -> Finding:
+def mean_stability(residual: np.ndarray, alpha: float = ALPHA) -> Finding:
     """CUSUM test of a stable mean against a wandering one: evidence of a level.
 
     ``D = max |S_k| / (sigma_LR sqrt(N))`` against the supremum of a Brownian bridge, the

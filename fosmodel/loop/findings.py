@@ -95,7 +95,7 @@ class Diagnostics:
             findings += aux_correlation(r, self._aux[n0], config.aux_max_lag, alpha=config.alpha)
         if n0 >= config.nonlinear_lags:
             findings.append(self._nonlinearity(fast, parts))
-        findings += [trend(r, t, alpha=config.alpha), mean_stability(r, t, alpha=config.alpha),
+        findings += [trend(r, t, alpha=config.alpha), mean_stability(r, alpha=config.alpha),
                      change_point(r, t, alpha=config.alpha), allan(r, rate, alpha=config.alpha)]
         if self.roles.slow:
             comp = family.compensation_series()

@@ -46,8 +46,8 @@ _UNIT_WORDS = {
 #: where it is.  The one-letter prefixes only right before the axis letter.
 _MOTION_AXES = {
     "magnetometer": ("magnetometer", "magnetic_field", "mag", "m"),
-    "velocity": ("velocity", "vel", "v"),
-    "position": ("position", "pos"),
+    "velocity": ("vel", "v"),
+    "position": ("pos",),
 }
 #: The same, as whole words a name begins with (``roll_deg``, ``q0``, ``alt_m``).
 _MOTION_WORDS = {
