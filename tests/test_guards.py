@@ -277,7 +277,21 @@ def test_an_interrupted_command_exits_130_and_writes_nothing(folder, capsys, mon
     assert not [p for p in folder.iterdir() if p.name.startswith(".")]
 
 
+@pytest.fixture
+def sigint_handled():
+    """Let a child process receive Ctrl-C as a terminal's user would send it.
+
+    A shell starting the tests in the background (``cmd &``) sets SIGINT to ignored, and an
+    ignored signal stays ignored through ``exec``: the command under test would run to its
+    end.  A handled one is reset to the default there, and Python installs its own.
+    """
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 @pytest.mark.slow
+@pytest.mark.usefixtures("sigint_handled")
 def test_ctrl_c_on_a_running_loop(tmp_path):
     """The real signal: SIGINT while the loop runs, then the same command to its end."""
     rng = np.random.default_rng(5)
@@ -435,6 +449,7 @@ def test_a_real_full_disk_and_a_real_read_only_folder(tmp_path, options, said):
         assert out.stdout.splitlines()[-1] == "left:"  # nothing in the mount
 
 
+@pytest.mark.usefixtures("sigint_handled")
 def test_ctrl_c_while_the_libraries_load_is_one_line(tmp_path):
     """Ctrl-C in the first seconds (numpy, pandas and scikit-learn loading) printed a traceback."""
     # a record the loop takes seconds over: a signal the loaded machine delivers late still
