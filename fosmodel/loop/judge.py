@@ -275,16 +275,18 @@ class Judgement:
         fitting segment's end; 1, the origin before it...); by default every origin that
         judged it.
         """
-        key = self.kept_on or ONE_STEP
-        found = self.gains(key)[::-1]
+        found = self._gains_back()
         chosen = range(len(found)) if origins is None else origins
         gains = [g for i in chosen if i < len(found) for g in [found[i]] if g is not None]
-        return float(np.mean(gains)), self.at(key).t
+        return float(np.mean(gains)), self.at(self.kept_on or ONE_STEP).t
 
     def judged_from(self) -> set[int]:
         """Return the origins that judged it, counted back from the end (0, always)."""
-        found = self.gains(self.kept_on or ONE_STEP)[::-1]
-        return {i for i, g in enumerate(found) if g is not None} | {0}
+        return {i for i, g in enumerate(self._gains_back()) if g is not None} | {0}
+
+    def _gains_back(self) -> list[float | None]:
+        """Return the gains on what it is kept on, from the end back to the earliest origin."""
+        return self.gains(self.kept_on or ONE_STEP)[::-1]
 
     def held_back(self, reason: str) -> Judgement:
         """Return this judgement, not accepted, for ``reason``."""
