@@ -122,8 +122,7 @@ def loop_truth(truth: dict) -> list[tuple[Effect, bool]]:
 
 def run(scenario: str, seed: int, **overrides):
     rec = make_scenario(scenario, seed=seed, **overrides)
-    y = rec.columns[rec.target]
-    channels = {k: v for k, v in rec.columns.items() if k != rec.target}
+    y, channels = _split(rec, rec.target)
     config = LoopConfig(rate=rec.rate, sensor="gyro", units=rec.truth["units"])
     return rec, y, channels, config, close_loop(y, channels, config)
 
@@ -221,24 +220,20 @@ def sweep_seed(label: str, scenario: str, column: str, day: int | None,
         sessions = sessions[day - 1:day]
     config = _config(column, sessions[0].rate)
     if len(sessions) > 1:
-        res: Any = close_sessions([Session(r.columns[column], {k: v for k, v in r.columns.items()
-                                                                if k != column}, f"day {i + 1}")
-                                   for i, r in enumerate(sessions)], config)
-        level = score_sessions([Session(r.columns[column], {k: v for k, v in r.columns.items()
-                                                             if k != column})
-                                for r in sessions], config, [make("level",
-                                                                  taus=res.level_taus)])
+        res: Any = close_sessions(_sessions(sessions, column), config)
+        level = score_sessions(_sessions(sessions, column), config,
+                               [make("level", taus=res.level_taus)])
         write = write_sessions_report
     else:
         rec = sessions[0]
-        y, channels = rec.columns[column], {k: v for k, v in rec.columns.items() if k != column}
+        y, channels = _split(rec, column)
         res = close_loop(y, channels, config)
         family = CandidateFamily(config.max_lag).add(make("level", taus=res.level_taus),
                                                      LoopRecord.single(y, channels, rec.rate))
         level = score_family(y, channels, config, family)
         write = write_loop_report
     kept = [s.effect for s in res.steps]
-    drivers = [e for e in kept if e.kind == "driver" and getattr(e, "channel", "") == "temp_c"]
+    drivers = _temperature_drivers(res)
     after, alone = res.after["bias_rms"].get("1800"), level["bias_rms"].get("1800")
     out = {"named": bool(drivers), "slow": any(e.part == "slow" for e in drivers),  # type: ignore
            "lower": after is not None and alone is not None and after < alone,
@@ -256,17 +251,28 @@ def axis_seed(day: int | None, column: str, seed: int) -> dict[str, Any]:
     sessions = make_sessions("temperature_sessions", seed=seed)
     config = _config(column, sessions[0].rate)
     if day is None:
-        res: Any = close_sessions([Session(r.columns[column], {k: v for k, v in r.columns.items()
-                                                                if k != column}, f"day {i + 1}")
-                                   for i, r in enumerate(sessions)], config)
+        res: Any = close_sessions(_sessions(sessions, column), config)
         worse = [*res.worse(), *(w for k in range(len(sessions)) for w in res.worse_in(k))]
     else:
-        rec = sessions[day - 1]
-        res = close_loop(rec.columns[column], {k: v for k, v in rec.columns.items()
-                                               if k != column}, config)
+        res = close_loop(*_split(sessions[day - 1], column), config)
         worse = res.worse()
-    return {"named": any(s.effect.kind == "driver" and getattr(s.effect, "channel", "")
-                         == "temp_c" for s in res.steps), "worse": sorted(set(worse))}
+    return {"named": bool(_temperature_drivers(res)), "worse": sorted(set(worse))}
+
+
+def _split(rec, column: str) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A record's modelled column, and its other columns."""
+    return rec.columns[column], {k: v for k, v in rec.columns.items() if k != column}
+
+
+def _sessions(records: list, column: str) -> list[Session]:
+    """Each day of a multi-session record as a session of the loop, ``day 1``..."""
+    return [Session(*_split(r, column), f"day {i + 1}") for i, r in enumerate(records)]
+
+
+def _temperature_drivers(res: Any) -> list[Effect]:
+    """The effects kept that take the temperature as a driver."""
+    return [s.effect for s in res.steps
+            if s.effect.kind == "driver" and getattr(s.effect, "channel", "") == "temp_c"]
 
 
 # -- companions ---------------------------------------------------------------------------------
@@ -278,8 +284,7 @@ def companion_rows() -> list[dict[str, Any]]:
     rows = []
     for column in [c for c in rec.columns if c[0] in "ga"]:
         config = _config(column, rec.rate)
-        res = close_loop(rec.columns[column], {k: v for k, v in rec.columns.items()
-                                               if k != column}, config)
+        res = close_loop(*_split(rec, column), config)
         inputs = [s.effect.describe() for s in res.steps if s.effect.kind == "companion"]
         rows.append({"Axis": column, "Companions": ", ".join(res.roles.companions),
                      "Taken as inputs": ", ".join(inputs) or "none",
