@@ -72,6 +72,9 @@ LAGS = 6
 LEVEL_BLOCKS = (2.0, 6.0, 20.0, 60.0)
 #: The "gain" that stands for a constant and a trend per session instead of a level.
 TREND = -1.0
+#: The block-scale errors a driver's forms are fitted beside: a constant per session, a
+#: constant and a trend per session, a level of each of :data:`LEVEL_BLOCKS`.
+GAINS = (0.0, TREND, *(1.0 / b for b in LEVEL_BLOCKS))
 #: A driver "varies" in the fitting data when the spread of its block means there is at
 #: least this share of its spread over the whole record.
 VARIES = 0.1
@@ -89,19 +92,20 @@ def block_samples(fit: Sequence[slice], rate: float, slow_s: float) -> int:
 
 
 def form_names(channel: str, centre: float, fit_s: float, block_s: float,
-               rate: float) -> list[str]:
+               rate: float, max_power: int = MAX_POWER, lags: int = LAGS) -> list[str]:
     """Return the forms offered for a driver: its powers, those of its lags, its rate of change.
 
-    The lags' time constants span three blocks to a tenth of the fitting data,
-    geometrically (:data:`LAGS` of them), each at least a sample.
+    Powers 1 to ``max_power``.  The lags' time constants span three blocks to a tenth of the
+    fitting data, geometrically (``lags`` of them; none and no rate of change with 0), each
+    at least a sample.
     """
     low, high = max(3 * block_s, 1.0 / rate), fit_s / 10
-    lags = list(dict.fromkeys(float(f"{t:.2g}") for t in np.geomspace(low, high, LAGS))) \
-        if high > low else []
-    names = [power_name(channel, p, centre) for p in range(1, MAX_POWER + 1)]
-    for tau in lags:
-        names += [power_name(channel, p, centre, tau_s=tau) for p in range(1, MAX_POWER + 1)]
-    return names + ([rate_name(channel, lags[0])] if lags else [])
+    taus = list(dict.fromkeys(float(f"{t:.2g}") for t in np.geomspace(low, high, lags))) \
+        if high > low and lags else []
+    names = [power_name(channel, p, centre) for p in range(1, max_power + 1)]
+    for tau in taus:
+        names += [power_name(channel, p, centre, tau_s=tau) for p in range(1, max_power + 1)]
+    return names + ([rate_name(channel, taus[0])] if taus else [])
 
 
 def block_means(x: np.ndarray, parts: Sequence[slice], block: int) -> list[np.ndarray]:
@@ -143,12 +147,15 @@ class DriverForms:
     """A driver's forms, as block means over the fitting data: computed once per channel.
 
     They do not change while the model's residual does; each form is computed session
-    by session and only its block means are kept.
+    by session and only its block means are kept.  ``max_power`` and ``lags`` are those of
+    :func:`form_names`; ``block`` (samples) replaces :func:`block_samples`'s.
     """
 
-    def __init__(self, record: LoopRecord, fit: Sequence[slice], slow_s: float) -> None:
+    def __init__(self, record: LoopRecord, fit: Sequence[slice], slow_s: float,
+                 max_power: int = MAX_POWER, lags: int = LAGS, block: int | None = None) -> None:
         self.record, self.fit = record, tuple(fit)
-        self.block = block_samples(fit, record.rate, slow_s)
+        self.max_power, self.lags = max_power, lags
+        self.block = block or block_samples(fit, record.rate, slow_s)
         self._forms: dict[str, tuple[list[str], list[np.ndarray]]] = {}
 
     def __call__(self, channel: str) -> tuple[list[str], list[np.ndarray]]:
@@ -158,7 +165,7 @@ class DriverForms:
             x = rec.channels[channel]
             centre = float(f"{np.concatenate([x[s] for s in fit]).mean():.4g}")
             names = form_names(channel, centre, sum(s.stop - s.start for s in fit) / rec.rate,
-                               self.block / rec.rate, rec.rate)
+                               self.block / rec.rate, rec.rate, self.max_power, self.lags)
             columns = [np.column_stack([self._session_form(name, s) for name in names])
                        for s in fit]
             self._forms[channel] = names, [block_means(c, [slice(0, len(c))], self.block)[0]
@@ -175,12 +182,13 @@ class DriverForms:
 
 
 def slow_driver(target: np.ndarray, channel: str, forms: DriverForms,
-                alpha: float) -> Finding:
+                alpha: float, gains: Sequence[float] = GAINS) -> Finding:
     """Test whether the driver ``channel`` explains the slow part of ``target``.
 
     ``target`` is the output minus the model's compensation so far, over the record.  The
     test runs at each of :data:`SCALES` (the block, and blocks that many times longer) and
-    keeps the scale of the smaller p-value, Bonferroni over the scales.  The evidence holds
+    keeps the scale of the smaller p-value, Bonferroni over the scales.  The forms are
+    fitted beside each of the block-scale errors ``gains`` (:data:`GAINS`).  The evidence holds
     the chosen forms with their weights (``forms``), the block (s), the level's time
     constant at the block scale in blocks (``level_blocks``; None for a constant per
     session) and the share of the slow innovations the forms remove.
@@ -189,8 +197,8 @@ def slow_driver(target: np.ndarray, channel: str, forms: DriverForms,
     y_blocks = block_means(target, forms.fit, forms.block)
     evidence: dict = {"channel": channel, "block_s": forms.block / forms.record.rate,
                       "forms": [], "level_blocks": None, "share": 0.0}
-    tests = [(scale, *_scale_test(_coarser(y_blocks, scale), _coarser(f_blocks, scale), names))
-             for scale in SCALES]
+    tests = [(scale, *_scale_test(_coarser(y_blocks, scale), _coarser(f_blocks, scale), names,
+                                  forms.max_power, gains)) for scale in SCALES]
     scale, f, p, best = min(tests, key=lambda t: (t[2], t[0]))
     if best is None:
         return Finding("driver", 0.0, 1.0, alpha, evidence)
@@ -212,45 +220,46 @@ def _coarser(parts: list[np.ndarray], scale: int) -> list[np.ndarray]:
             for x in parts]
 
 
-def _scale_test(y_blocks: list[np.ndarray], f_blocks: list[np.ndarray],
-                names: list[str]) -> tuple[float, float, tuple | None]:
+def _scale_test(y_blocks: list[np.ndarray], f_blocks: list[np.ndarray], names: list[str],
+                max_power: int, gains: Sequence[float]) -> tuple[float, float, tuple | None]:
     """Return the F statistic, its p-value and the best fit (:func:`_best_fit`) at one scale.
 
     The p-value is Bonferroni over the bases tried (the driver and each of its lags).
     """
-    best = _best_fit(y_blocks, f_blocks)
+    rate = bool(names) and (parse(names[-1]) or ("",))[0] == "rate"
+    bases = (len(names) - rate) // max_power
+    best = _best_fit(y_blocks, f_blocks, _models(bases, max_power, rate), gains)
     if best is None:
         return 0.0, 1.0, None
     _, columns, _, residual, sse0 = best
     k, sse = len(columns), float(residual @ residual)
     dof = effective_samples(residual) - k - 1
     f = ((sse0 - sse) / k) / (sse / dof) if sse > 0 and dof > 0 else 0.0
-    p = min(1.0, float(stats.f.sf(f, k, dof)) * (len(names) // MAX_POWER)) if dof > 0 else 1.0
+    p = min(1.0, float(stats.f.sf(f, k, dof)) * bases) if dof > 0 else 1.0
     return float(f), p, best
 
 
-def _models(n_forms: int) -> list[list[int]]:
+def _models(bases: int, max_power: int, rate: bool) -> list[list[int]]:
     """Return the column sets tried.
 
-    Each base (the driver or one of its lags) with powers 1..p, with or without the rate of
-    change (the last column, when :func:`form_names` has it).
+    Each base (the driver or one of its lags) with powers 1..p, p up to ``max_power``, with
+    or without the rate of change (the last column, when :func:`form_names` has it).
     """
-    bases = n_forms // MAX_POWER
-    rate = [n_forms - 1] if n_forms % MAX_POWER else []
-    return [[j * MAX_POWER + q for q in range(p)] + extra for j in range(bases)
-            for p in range(1, MAX_POWER + 1) for extra in ([[], rate] if rate else [[]])]
+    extras = [[], [bases * max_power]] if rate else [[]]
+    return [[j * max_power + q for q in range(p)] + extra for j in range(bases)
+            for p in range(1, max_power + 1) for extra in extras]
 
 
-def _best_fit(y_blocks: list[np.ndarray], f_blocks: list[np.ndarray]) -> tuple | None:
-    """Return the fit with the lowest BIC.
+def _best_fit(y_blocks: list[np.ndarray], f_blocks: list[np.ndarray],
+              models: list[list[int]], gains: Sequence[float]) -> tuple | None:
+    """Return the fit with the lowest BIC among the column sets ``models`` and ``gains``.
 
     The fit is ``(gain, columns, weights, residual, SSE with no form)``, or None
     when no form beats no form at all (a driver that does not vary, or explains nothing):
     a polynomial in one base, its degree chosen by BIC as the gain of the level is.
     """
     best, best_bic = None, math.inf
-    models = _models(f_blocks[0].shape[1])
-    for gain in (0.0, TREND, *(1.0 / b for b in LEVEL_BLOCKS)):
+    for gain in gains:
         y, forms = innovations(y_blocks, gain), innovations(f_blocks, gain)
         if len(y) < 10 or np.ptp(y) == 0:
             continue
@@ -288,9 +297,9 @@ def effective_samples(residual: np.ndarray) -> float:
     return n * (1 - r) / (1 + r)
 
 
-def _innovations_of(target: np.ndarray, columns: Mapping[str, np.ndarray],
-                    parts: Sequence[slice], block: int, gain: float,
-                    ) -> tuple[np.ndarray, np.ndarray]:
+def innovations_of(target: np.ndarray, columns: Mapping[str, np.ndarray],
+                   parts: Sequence[slice], block: int, gain: float,
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """Return the centred innovations of ``target`` and of each form (a column each)."""
     y = innovations(block_means(target, parts, block), gain)
     f = innovations(block_means(np.column_stack(list(columns.values())), parts, block), gain)
@@ -306,7 +315,7 @@ def refit_forms(target: np.ndarray, columns: Mapping[str, np.ndarray], parts: Se
     that does not vary there keeps a weight of 0.
     """
     names = list(columns)
-    y, f = _innovations_of(target, columns, parts, block, gain)
+    y, f = innovations_of(target, columns, parts, block, gain)
     if len(y) < 2:
         return dict.fromkeys(names, 0.0)
     coef = np.linalg.lstsq(f, y, rcond=None)[0]
@@ -324,7 +333,7 @@ def forms_p(target: np.ndarray, columns: Mapping[str, np.ndarray], parts: Sequen
     ramp of the driver beside a trend, say, where the two are one line.
     """
     beside = dict(beside or {})
-    y, f = _innovations_of(target, {**beside, **columns}, parts, block, gain)
+    y, f = innovations_of(target, {**beside, **columns}, parts, block, gain)
     k, j = len(columns), len(beside)
     if len(y) <= k + j + 2 or not np.any(y):
         return 1.0
