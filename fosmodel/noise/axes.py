@@ -160,6 +160,31 @@ def infer_axis(column: str) -> tuple[str | None, str | None]:
     return None, None
 
 
+def axis_letter(column: str) -> str | None:
+    """Tell which axis (``"x"``, ``"y"``, ``"z"``) a gyro's or accelerometer's name gives, or None.
+
+    The letter right after the sensor's prefix (``gx_dps``, ``acc_y``), or an index
+    ``[0]``..``[2]`` after a longer prefix (``gyro_rad[1]``).
+
+    Examples
+    --------
+    >>> axis_letter("gx_dps"), axis_letter("acc_y"), axis_letter("gyro_rad[2]"), axis_letter("t")
+    ('x', 'y', 'z', None)
+    """
+    name = column.strip().lower()
+    for prefixes in _PREFIXES.values():
+        for prefix in prefixes:
+            rest = _after_prefix(name, prefix)
+            if rest is None:
+                continue
+            found = re.match(r"[._\- ]?([xyz])(?![a-z])", name[len(prefix):])
+            index = re.search(r"\[([012])\]", rest)
+            if found:
+                return found.group(1)
+            return "xyz"[int(index.group(1))] if index else None
+    return None
+
+
 def motion_kind(column: str) -> str | None:
     """Tell what of the motion a column's name says it measures, or None.
 
