@@ -9,7 +9,8 @@ Topics
 ``sensor_gyro``, ``sensor_accel``
     ``x``, ``y``, ``z`` -> ``gx``, ``gy``, ``gz`` or ``ax``, ``ay``, ``az``, and
     ``temperature`` (degC, the sensor's own); time ``timestamp_sample``, the
-    measurement's.
+    measurement's; the sensor's ``device_id`` (the median over the messages, as PX4's
+    thermal calibration reads it) in the metadata as ``device id``.
 ``vehicle_imu``
     ``delta_angle[i] / delta_angle_dt`` -> ``gx``, ``gy``, ``gz`` and
     ``delta_velocity[i] / delta_velocity_dt`` -> ``ax``, ``ay``, ``az``: the increments
@@ -106,6 +107,8 @@ def read_ulog(path: Path, topic: str | None = None,
     notes.insert(0, f"PX4 ULog, topic {imu.name} ({len(time)} messages): "
                     f"{describe_columns(columns)}; time from {field} (us)")
     metadata = {"format": "PX4 ULog", "topic": imu.name, "message type": data.name}
+    if "device_id" in data.data:  # PX4's thermal calibration takes its median, so do we
+        metadata["device id"] = str(int(np.median(data.data["device_id"])))
     if temperature_topic is not None:
         with_temperature = [_topic(n, d) for n, d in named.items() if "temperature" in d.data]
         keyword = "temperature_topic"
