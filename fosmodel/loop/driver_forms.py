@@ -92,12 +92,13 @@ def block_samples(fit: Sequence[slice], rate: float, slow_s: float) -> int:
 
 
 def form_names(channel: str, centre: float, fit_s: float, block_s: float,
-               rate: float, max_power: int = MAX_POWER, lags: int = LAGS) -> list[str]:
+               rate: float, max_power: int = MAX_POWER, lags: int = LAGS,
+               with_rate: bool = True) -> list[str]:
     """Return the forms offered for a driver: its powers, those of its lags, its rate of change.
 
     Powers 1 to ``max_power``.  The lags' time constants span three blocks to a tenth of the
     fitting data, geometrically (``lags`` of them; none and no rate of change with 0), each
-    at least a sample.
+    at least a sample; the rate of change (of the shortest lag) unless not ``with_rate``.
     """
     low, high = max(3 * block_s, 1.0 / rate), fit_s / 10
     taus = list(dict.fromkeys(float(f"{t:.2g}") for t in np.geomspace(low, high, lags))) \
@@ -105,7 +106,7 @@ def form_names(channel: str, centre: float, fit_s: float, block_s: float,
     names = [power_name(channel, p, centre) for p in range(1, max_power + 1)]
     for tau in taus:
         names += [power_name(channel, p, centre, tau_s=tau) for p in range(1, max_power + 1)]
-    return names + ([rate_name(channel, taus[0])] if taus else [])
+    return names + ([rate_name(channel, taus[0])] if taus and with_rate else [])
 
 
 def block_means(x: np.ndarray, parts: Sequence[slice], block: int) -> list[np.ndarray]:
@@ -147,14 +148,16 @@ class DriverForms:
     """A driver's forms, as block means over the fitting data: computed once per channel.
 
     They do not change while the model's residual does; each form is computed session
-    by session and only its block means are kept.  ``max_power`` and ``lags`` are those of
-    :func:`form_names`; ``block`` (samples) replaces :func:`block_samples`'s.
+    by session and only its block means are kept.  ``max_power``, ``lags`` and
+    ``with_rate`` are those of :func:`form_names`; ``block`` (samples) replaces
+    :func:`block_samples`'s.
     """
 
     def __init__(self, record: LoopRecord, fit: Sequence[slice], slow_s: float,
-                 max_power: int = MAX_POWER, lags: int = LAGS, block: int | None = None) -> None:
+                 max_power: int = MAX_POWER, lags: int = LAGS, block: int | None = None,
+                 with_rate: bool = True) -> None:
         self.record, self.fit = record, tuple(fit)
-        self.max_power, self.lags = max_power, lags
+        self.max_power, self.lags, self.with_rate = max_power, lags, with_rate
         self.block = block or block_samples(fit, record.rate, slow_s)
         self._forms: dict[str, tuple[list[str], list[np.ndarray]]] = {}
 
@@ -165,7 +168,8 @@ class DriverForms:
             x = rec.channels[channel]
             centre = float(f"{np.concatenate([x[s] for s in fit]).mean():.4g}")
             names = form_names(channel, centre, sum(s.stop - s.start for s in fit) / rec.rate,
-                               self.block / rec.rate, rec.rate, self.max_power, self.lags)
+                               self.block / rec.rate, rec.rate, self.max_power, self.lags,
+                               self.with_rate)
             columns = [np.column_stack([self._session_form(name, s) for name in names])
                        for s in fit]
             self._forms[channel] = names, [block_means(c, [slice(0, len(c))], self.block)[0]
