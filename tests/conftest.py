@@ -327,3 +327,26 @@ def _sweep_record(seed: int, hours: float = 6.0, rate: float = 1.0, gain: float 
 def sweep_record() -> Callable[..., tuple[np.ndarray, np.ndarray]]:
     """``sweep_record(seed, **options)``: a temperature sweep and the gyro bias it drives."""
     return _sweep_record
+
+
+def _thermal_group(seed: int = 0, lag_s: float = 0.0, sessions: int = 3,
+                   columns: list[str] | None = None, **options):
+    """Thermal-calibration sweeps of one IMU as a tempcal group, and their truth.
+
+    ``data_synth.thermal.thermal_sessions`` draws the sessions; ``columns`` keeps some axes.
+    """
+    from data_synth.thermal import thermal_sessions
+    from fosmodel.noise.axes import resolve_axes
+    from fosmodel.workflows.tempcal import AxisGroup, TempSession
+
+    recs = thermal_sessions(seed, lag_s=lag_s, sessions=sessions, **options)
+    names = columns or [c for c in recs[0].columns if c != "temp_c"]
+    runs = tuple(TempSession(f"s{k + 1}", {c: r.columns[c] for c in names}, r.columns["temp_c"],
+                             r.rate) for k, r in enumerate(recs))
+    return AxisGroup("imu", tuple(resolve_axes(names)), "temp_c", runs), recs[0].truth["thermal"]
+
+
+@pytest.fixture(scope="session")
+def thermal_group() -> Callable[..., tuple]:
+    """``thermal_group(seed, lag_s=..., sessions=..., columns=...)``: sweeps and their truth."""
+    return _thermal_group
