@@ -16,11 +16,15 @@ import re
 _START = r"(?<![\w.'\"/=-])"
 #: The options the library names, by their keyword; each becomes ``--`` and its name.
 KEYWORDS = ("columns", "rate", "scale", "uniform", "outliers", "gaps", "topic",
-            "temperature_topic", "loop_split")
+            "temperature_topic", "loop_split", "temperature", "degree", "instance", "gyro_id",
+            "accel_id")
 # Spellings with a value that the flag spells otherwise, tried before the bare keywords.
 _SPELLINGS = (
     (re.compile(_START + r"train_s= and evaluate_s="), "--split"),
     (re.compile(_START + r"horizon_s="), "--horizon"),
+    (re.compile(_START + r"min_span_c="), "--min-span "),
+    (re.compile(_START + r"head_s="), "--head "),
+    (re.compile(_START + r"block_s="), "--block "),
     (re.compile(_START + r"uniform=True\b"), "--uniform"),
     (re.compile(_START + r"static_only=True\b"), "--static-only"),
     (re.compile(_START + r"gaps=([\"'])(fill|segments)\1"), r"--\2"),

@@ -180,7 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
     allan.add_argument("--json", help="also write the Allan deviation and coefficients as JSON")
     allan.set_defaults(func=Command("commands", "allan"))
 
-    from . import fleet, imu
+    from . import fleet, imu, tempcal
 
     six = sub.add_parser("imu", help="every axis of an IMU record: Allan noise, model-order "
                          "study and residual loop, one report")
@@ -189,6 +189,10 @@ def build_parser() -> argparse.ArgumentParser:
     many = sub.add_parser("fleet", help="a batch of IMU records through the six-axis workflow, "
                           "in this process or on Dask; a rerun resumes")
     fleet.configure_parser(many).set_defaults(func=Command("fleet", "fleet"))
+
+    cal = sub.add_parser("tempcal", help="thermal calibration of an IMU: every axis's bias "
+                         "against temperature, judged out of sample, for PX4 and ArduPilot")
+    tempcal.configure_parser(cal).set_defaults(func=Command("tempcal", "tempcal"))
 
     from data_synth.cli import configure_parser
 
