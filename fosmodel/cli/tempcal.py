@@ -62,7 +62,8 @@ def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser
                         help="the highest power of temperature, 1 to 3 (default: the firmware's "
                              "3, as far as the temperature's span supports it)")
     parser.add_argument("--min-span", type=positive_float, default="5", metavar="C",
-                        help="the least temperature span fitted over, in degC")
+                        help="the least temperature span fitted over, in degC, and the span "
+                             "each power of the polynomial needs")
     parser.add_argument("--block", type=positive_float, default="30", metavar="S",
                         help="blocks (s) of the slow bias the fits and the judge read")
     parser.add_argument("--head", type=positive_float, default="60", metavar="S",

@@ -12,7 +12,7 @@ several, else the later part of the sweep.
 
 Before any fit the temperature's range is checked: a record without a temperature column,
 or whose temperature spans less than :data:`MIN_SPAN_C`, is refused, and so is a degree
-the span cannot support (:data:`SPAN_PER_DEGREE_C` for each power; PX4's on-board
+the span cannot support (as much again for each power; PX4's on-board
 calibration asks a rise of 24 C for its cubic, ArduPilot's 10 C).  Without a degree asked,
 the firmware's cubic is offered as far as the span supports it, and a narrower one is said.
 
@@ -42,10 +42,9 @@ Progress = Callable[[str], None]
 #: The highest power of temperature PX4's (``TC_*_X3_*``) and ArduPilot's (``INS_TCALn_*3``)
 #: firmware evaluate.
 FIRMWARE_DEGREE = 3
-#: The least temperature span (degC) a calibration is fitted over, and the span each power
-#: of the polynomial needs.
+#: The least temperature span (degC) a calibration is fitted over: each power of the
+#: polynomial needs as much.
 MIN_SPAN_C = 5.0
-SPAN_PER_DEGREE_C = 5.0
 
 
 @dataclass(frozen=True)
@@ -58,7 +57,7 @@ class TempcalConfig:
         The highest power of temperature offered, at most :data:`FIRMWARE_DEGREE` (default:
         that, as far as the temperature's span supports it).
     min_span_c : float
-        The least temperature span (degC) fitted over.
+        The least temperature span (degC) fitted over, and the span each power needs.
     block_s : float
         Blocks (s) of the slow part the fits and the held-out residual read.
     head_s : float
@@ -112,18 +111,17 @@ class TempcalConfig:
         InputError
             A span below :attr:`min_span_c`, or a degree asked that it cannot support.
         """
-        supported = min(FIRMWARE_DEGREE, int(span // SPAN_PER_DEGREE_C + 1e-9))
-        if span < self.min_span_c or supported < 1:
+        supported = min(FIRMWARE_DEGREE, int(span / self.min_span_c + 1e-9))
+        if supported < 1:
             raise InputError(f"{where} spans only {span:.3g} C; a thermal calibration needs at "
-                             f"least {max(self.min_span_c, SPAN_PER_DEGREE_C):g} C "
-                             "(min_span_c=...)")
+                             f"least {self.min_span_c:g} C (min_span_c=...)")
         if self.degree is not None and self.degree > supported:
             raise InputError(f"{where} spans {span:.3g} C, too narrow for degree={self.degree} "
-                             f"({SPAN_PER_DEGREE_C:g} C per power); it supports degree="
+                             f"({self.min_span_c:g} C per power); it supports degree="
                              f"{supported}")
         if self.degree is None and supported < FIRMWARE_DEGREE:
             return supported, (f"{where} spans {span:.3g} C: powers up to {supported} offered "
-                               f"({SPAN_PER_DEGREE_C:g} C per power), not the firmware's "
+                               f"({self.min_span_c:g} C per power), not the firmware's "
                                f"{FIRMWARE_DEGREE}")
         return self.degree or supported, None
 
