@@ -82,3 +82,16 @@ def test_a_large_point_loss_at_one_horizon_is_not_outweighed_by_gains_elsewhere(
     assert verdict(last, [], 0.01, level.strict) is None
     mild = last[:2] + (Comparison("outage", 300.0, 14, -0.0514, None, -0.5, -1.0, 0.8, 0.2),)
     assert verdict(mild, [], 0.01, level.strict) == "outage_30s"
+
+
+def test_the_model_handed_on_is_the_starting_one_when_the_effects_made_prediction_worse():
+    from dataclasses import replace
+
+    res = _loop("slow_step_third", 0)
+    assert res.steps and not res.worse()
+    assert res.handed_on() == (res.final_model, "the loop's final model")
+    # the same result with the prediction segment's numbers the other way round
+    turned = replace(res, before_scores=res.after_scores, after_scores=res.before_scores)
+    assert turned.worse()
+    bound, which = turned.handed_on()
+    assert bound is res.base_model and which.startswith("the loop's starting model")
