@@ -721,9 +721,9 @@ def _cooling_temperature() -> list:
 
 
 @_register("short_driver", SHORT_DURATION, LOOP_RATE,
-           "Ten minutes: AR(3) + white noise plus an undeclared 0.03 deg/s/C bias (or "
+           "Ten minutes: AR(3) + white noise plus an undeclared 0.1 deg/s/C bias (or "
            "sensitivity) in a cooling temp_c, and a bias random walk of walk_k (default none)")
-def _short_driver(sensitivity: float = 0.03, walk_k: float = 0.0):
+def _short_driver(sensitivity: float = 0.1, walk_k: float = 0.0):
     walk = [RandomWalk(walk_k, declared=False, name="bias_walk")] if walk_k else []
     bias = [TemperatureBias((0.0, sensitivity), t_ref_c=25.0, declared=False,
                             name="temperature_bias")] if sensitivity else []

@@ -41,7 +41,7 @@ from ..io.split import Split
 from ..models.bound import BoundModel
 from .config import LoopConfig
 from .diagnose import Finding
-from .driver_forms import still
+from .driver_forms import MIN_BLOCKS, still
 from .effects import CandidateFamily, Effect, Offer, effects_from
 from .effects.drift import trend_note
 from .findings import Diagnostics, residual
@@ -283,11 +283,25 @@ def notes(record: LoopRecord, diagnose: Diagnostics, family: CandidateFamily, ju
     out = [text for ch in roles.slow if ch not in _driven(family)
            for text in [still(record, diagnose.forms, ch, target)] if text]
     out += trend_note(record, diagnose.fit, roles, diagnose.config)
+    out += [first_note(ch, diagnose.fit, diagnose.config) for ch in roles.slow
+            if ch in diagnose.first]
     out += [f"the {h:g} s horizon is not judged: {why}" for h, why in judged.skipped.items()]
     out += [f"the {h:g} s horizon is not reported: {why}" for h, why in reported.skipped.items()]
     if roles.companions:
         out.append(f"channels by role: {roles.describe()}")
     return out
+
+
+def first_note(channel: str, fit: tuple[slice, ...], config: LoopConfig) -> str:
+    """Say that a driver was tested as the short record asks, and the length that does not."""
+    fit_s = sum(s.stop - s.start for s in fit) / config.rate
+    least = MIN_BLOCKS * config.slow_s
+    return (f"{channel} runs as time does over the {fit_s:.4g} s of fitting data, shorter than "
+            f"the {least:g} s ({MIN_BLOCKS} blocks of {config.slow_s:g} s) over which a driver "
+            f"is told from a trend in time: its slow part goes first, tested without a trend "
+            f"as its rival too (at level {config.alpha ** 2:g}), and a trend in time waits for "
+            f"it; with fitting data of {least:g} s or more (a record of "
+            f"{least / config.train:g} s at this split) it is tested beside a trend")
 
 
 def judged_notes(steps: list[Step]) -> list[str]:

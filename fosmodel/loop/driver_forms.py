@@ -75,9 +75,57 @@ TREND = -1.0
 #: The block-scale errors a driver's forms are fitted beside: a constant per session, a
 #: constant and a trend per session, a level of each of :data:`LEVEL_BLOCKS`.
 GAINS = (0.0, TREND, *(1.0 / b for b in LEVEL_BLOCKS))
+#: On short fitting data, a driver whose block means correlate with time this much or more
+#: is tested without the trend rival too (:func:`time_like`).
+TIME_LIKE = 0.5
+#: The block-scale errors of that test: all of :data:`GAINS` but the trend.
+FIRST_GAINS = tuple(g for g in GAINS if g != TREND)
 #: A driver "varies" in the fitting data when the spread of its block means there is at
 #: least this share of its spread over the whole record.
 VARIES = 0.1
+
+
+def short_fit(fit: Sequence[slice], rate: float, slow_s: float) -> bool:
+    """Whether the fitting data are short for a driver: fewer than ``MIN_BLOCKS * slow_s`` s.
+
+    There the blocks are shorter than ``slow_s`` (:func:`block_samples`), and a trend in
+    time per session, fitted beside the driver's forms as a rival (:data:`TREND`), takes a
+    driver that follows time for itself: ten minutes of a cooling die are one line.
+    """
+    return sum(s.stop - s.start for s in fit) < MIN_BLOCKS * slow_s * rate
+
+
+def time_like(record: LoopRecord, fit: Sequence[slice], channel: str, slow_s: float) -> bool:
+    """Whether the driver goes first: short fitting data over which it runs as time does.
+
+    On short fitting data (:func:`short_fit`) whose driver's block means correlate with
+    time at :data:`TIME_LIKE` or more, a function of time fitted there is an extrapolation
+    and the measured driver the physics: the driver is then tested without the trend rival
+    too (:data:`FIRST_GAINS`, at a stricter level, :func:`driver_first`).  Bartlett's
+    bound (:func:`follows_time`) cannot say it there: over a few hundred blocks any series
+    correlates with time by chance as far as two trends do.
+    """
+    if not short_fit(fit, record.rate, slow_s):
+        return False
+    means = block_means(record.channels[channel], fit, block_samples(fit, record.rate, slow_s))
+    x = innovations(means, 0.0)
+    t = innovations([np.arange(len(m), dtype=float) for m in means], 0.0)
+    return len(x) >= 10 and bool(np.any(x)) and abs(float(np.corrcoef(x, t)[0, 1])) >= TIME_LIKE
+
+
+def driver_first(target: np.ndarray, channel: str, forms: DriverForms,
+                 alpha: float) -> Finding:
+    """Test a time-like driver (:func:`time_like`) without the trend rival, at ``alpha ** 2``.
+
+    The trend per session guards against a wander that trends with the driver over the
+    fitting data; without it the test asks for the evidence of two tests at once (ten-minute
+    controls, a random walk beside a cooling die temperature, read p 4e-5 to 5e-4 there; a
+    bias that follows the die 1e-9 or less).  The evidence says it was tested so
+    (``first``).
+    """
+    finding = slow_driver(target, channel, forms, alpha ** 2, FIRST_GAINS)
+    finding.evidence["first"] = True
+    return finding
 
 
 def block_samples(fit: Sequence[slice], rate: float, slow_s: float) -> int:

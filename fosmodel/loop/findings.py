@@ -31,7 +31,7 @@ from .diagnose import (
     trend,
     whiteness,
 )
-from .driver_forms import DriverForms, slow_driver
+from .driver_forms import DriverForms, driver_first, slow_driver, time_like
 from .effects import CandidateFamily
 from .record import LoopRecord
 from .roles import Roles
@@ -67,6 +67,7 @@ class Diagnostics:
         self.channels = {k: record.channels[k] for k in (*roles.drivers, *roles.companions)}
         self._aux: dict[int, AuxChannels] = {}
         self.forms = DriverForms(record, fit, config.slow_s)
+        self.first = {ch for ch in roles.slow if time_like(record, fit, ch, config.slow_s)}
 
     def __call__(self, model: BoundModel, family: CandidateFamily) -> list[Finding]:
         """Return the findings on ``model`` (of one record), whose family is ``family``."""
@@ -100,9 +101,16 @@ class Diagnostics:
         if self.roles.slow:
             comp = family.compensation_series()
             target = y if comp is None else y - comp
-            findings += [slow_driver(target, ch, self.forms, config.alpha)
-                         for ch in self.roles.slow]
+            findings += [self._driver(target, ch) for ch in self.roles.slow]
         return findings
+
+    def _driver(self, target: np.ndarray, channel: str) -> Finding:
+        """Return the driver test; a time-like driver's without the trend rival if it fails."""
+        found = slow_driver(target, channel, self.forms, self.config.alpha)
+        if found.fired or channel not in self.first:
+            return found
+        first = driver_first(target, channel, self.forms, self.config.alpha)
+        return first if first.fired else found
 
     def _nonlinearity(self, fast: np.ndarray, parts: list[slice]) -> Finding:
         """Test the residual for products of the fast parts of the lagged outputs."""
