@@ -5,7 +5,9 @@ Four parts, each a section of the page:
 
 * ``close-loop-synthetic``: every short loop scenario of data_synth on seeds 0-9
   (controls: 0-19): the 5-minute records with one undeclared effect each (two at
-  once in one) and the 15-minute records with slow errors.  For seed 0 what the loop
+  once in one), the 15-minute records with slow errors (a step a third of the way in and
+  a warm-up that starts late among them) and a ten-minute record whose bias follows a
+  cooling die temperature.  For seed 0 what the loop
   kept and the prediction-segment error before the loop, after it, and with the true
   effects added to the same starting model (the 30 s outage MSE for slow effects,
   the one-step MSE for fast ones); over the seeds how often each true effect was
@@ -76,7 +78,11 @@ EFFECTS += [(f"slow_warmup (tau {tau:g} s)", "slow_warmup", {"tau_s": tau})
 EFFECTS += [(name, name, {}) for name in ("slow_warmup_drift", "slow_steps",
                                           "slow_random_walk_temperature",
                                           "slow_warmup_drift_temperature")]
-CONTROLS = ["clean", "unrelated_temperature", "slow_clean", "slow_unrelated_temperature"]
+# effects that begin inside the record, and a driver on ten minutes
+EFFECTS += [(name, name, {}) for name in ("slow_step_third", "slow_late_warmup",
+                                          "short_driver")]
+CONTROLS = ["clean", "unrelated_temperature", "slow_clean", "slow_unrelated_temperature",
+            "short_driver_control"]
 SEEDS, CONTROL_SEEDS = range(10), range(20)
 #: The day-long records: (label, scenario, column, the one session looped alone or None for
 #: all).  Days 2 and 3 of the three are looped alone too, as one looks at a single session of

@@ -44,8 +44,8 @@ def test_the_origins_before_an_onset_or_too_soon_after_it_cannot_judge():
     step, level = make("step", time_s=300.0), make("level", taus=(1.0,))
     assert [judge.can_judge(o, step) for o in judge.origins] == [False, False, True, True]
     assert all(judge.can_judge(o, level) for o in judge.origins)
-    # 20 s (slow_s) after the onset at least
-    assert not judge.can_judge(31_999, step) and judge.can_judge(32_000, step)
+    # 10 s (half of slow_s) after the onset at least
+    assert not judge.can_judge(30_999, step) and judge.can_judge(31_000, step)
     # a step already in the model: a level is judged only where the current model saw it
     later = Judge(fitter, fitter.fit(family), family, judge_plan(segments.evaluate, config),
                   added=[step])
@@ -69,7 +69,7 @@ def test_a_step_no_origin_can_judge_falls_to_the_evaluation_segment_and_its_stri
     judgement = judge(fitter.fit(trial), trial, step)
     assert judgement.earlier == (None, None, None)
     assert judgement.note.startswith("judged on the evaluation segment alone, by the strict "
-                                     "rule: no earlier origin has 20 s after its onset (420 s)")
+                                     "rule: no earlier origin has 10 s after its onset (420 s)")
     assert not judgement.accepted  # no comparison's halves are judged on a 180 s segment
 
 

@@ -74,9 +74,10 @@ MIN_OUTAGE_GAIN = 1e-2
 #: be kept on its gains elsewhere (its point estimate, however few the windows).
 MAX_POINT_LOSS = 0.1
 #: Data an origin needs after an effect's onset to judge it, in units of ``slow_s``: the
-#: effect's weight is then a mean over that much at least, where the fast noise has averaged
-#: out.
-ONSET_REFIT_SLOWS = 1.0
+#: effect's weight is then a mean over half the slow time scale at least (10 s by default;
+#: a step's weight from the 1.6 s after it is what the noise makes it, from 18 s it is the
+#: step's).
+ONSET_REFIT_SLOWS = 0.5
 ONE_STEP, OUTAGE = "one_step", "outage"
 BATCHES = 10  # groups of one-step errors of the encompassing test
 
