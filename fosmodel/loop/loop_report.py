@@ -12,7 +12,15 @@ from ..typeset.markdown import markdown_table
 from .closeloop import REPORT_WINDOWS, LoopResult
 from .diagnose import Finding
 from .intervals import Ratio, ratios
-from .judge import MIN_GAIN, MIN_HALF_WINDOWS, MIN_OUTAGE_GAIN, MIN_WINDOWS, Judgement
+from .judge import (
+    MAX_POINT_LOSS,
+    MIN_GAIN,
+    MIN_HALF_WINDOWS,
+    MIN_OUTAGE_GAIN,
+    MIN_WINDOWS,
+    ONSET_REFIT_SLOWS,
+    Judgement,
+)
 from .loop_figure import finding_name, residual_figure
 from .rounds import Rejected
 
@@ -137,14 +145,18 @@ def _setting(result: LoopResult) -> str:
         f"at least {MIN_WINDOWS} windows) beyond noise (forecast-encompassing t test at "
         f"{cfg.accept_alpha:g}) by at least {MIN_GAIN:.1%} ({MIN_OUTAGE_GAIN:.0%} for an outage "
         "bias), and makes none of them worse "
-        f"beyond noise; a function of time or a fast effect must also gain over each half of "
+        f"beyond noise, nor any outage bias's sum of squares more than {MAX_POINT_LOSS:.0%} "
+        "larger however few its windows; a function of time or a fast effect must also gain "
+        "over each half of "
         f"the segment (when each holds at least {MIN_HALF_WINDOWS} windows) and, with its "
         f"weights refitted on the past before earlier origins ({origins} s), lose nothing "
         "there; a function of time is not kept on an outage length judged only right after "
-        "its data (halves too few to judge, no earlier origin). An outage length the "
+        "its data (halves too few to judge, no earlier origin). An effect with an onset (a "
+        f"step) is judged only from the origins {ONSET_REFIT_SLOWS * cfg.slow_s:g} s or more "
+        "after it and after those of the effects already in. An outage length the "
         "segment holds fewer windows of is judged from the "
-        f"earliest origin to its end, where that stretch holds {MIN_WINDOWS}: nothing may "
-        "lose there beyond noise. A drift or a step waits for the level and the drivers. "
+        f"earliest origin that can judge to its end, where that stretch holds {MIN_WINDOWS}: "
+        "nothing may lose there. A drift or a step waits for the level and the drivers. "
         "Channels: "
         f"{result.roles.describe()}. Level time constants offered: "
         + (", ".join(f"{t:g}" for t in result.level_taus) or "none") + " s. The prediction "
