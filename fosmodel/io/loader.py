@@ -46,6 +46,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..core import files
 from ..core.exceptions import InputError
 from ..core.validation import did_you_mean
 from .csv_reader import Preamble, preamble_rate
@@ -157,6 +158,7 @@ def load_record(
     """
     path = Path(path)
     src = str(path)
+    files.protect(path)  # no cleanup of an output's temporaries removes it
     if rate is not None and not RATE_RANGE[0] <= rate <= RATE_RANGE[1]:
         raise InputError(f"the sample rate must be a positive number of Hz, from "
                          f"{RATE_RANGE[0]:g} to {RATE_RANGE[1]:g}, got {rate!r}")
