@@ -421,6 +421,8 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
         if joint is not None:
             write_text(tmp / "joint_model.json", json.dumps(joint.to_dict(), indent=1) + "\n")
     print(noise.summary())
+    for line in noise.export_notes(args.inflate):
+        print(f"warning: {line}", file=sys.stderr)
     for a in noise.axes:
         if a.fit.misses():
             print(f"warning: {a.axis.column}: the IEEE Std 952 fit misses the measured Allan "

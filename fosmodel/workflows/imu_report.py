@@ -175,9 +175,10 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
     sections = [
         ("Noise parameters (Allan variance)", "noise",
          "IEEE Std 952 terms fitted to each axis's overlapping Allan deviation; exports for "
-         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/openvins_kalibr_imu_chain.yaml`), "
+         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/kalibr_imu_chain.yaml`), "
          "VINS-Mono/Fusion (`noise/vins_imu.yaml`), ORB-SLAM3 (`noise/orbslam3_imu.yaml`), "
-         "PX4 EKF2 (`noise/px4_ekf2.params`), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
+         "PX4 EKF2 (`noise/px4_ekf2.params` for QGroundControl, `noise/px4_ekf2_console.txt` "
+         "for the console), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
          "MATLAB (`noise/imu_params.m`) and JSON (`noise/imu_noise.json`)"
          + (f", inflated {result.config.inflate:g}x for a moving platform" if
             result.config.inflate != 1.0 else "")
