@@ -423,11 +423,8 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
     print(noise.summary())
     for line in noise.export_notes(args.inflate):
         print(f"warning: {line}", file=sys.stderr)
-    for a in noise.axes:
-        if a.fit.misses():
-            print(f"warning: {a.axis.column}: the IEEE Std 952 fit misses the measured Allan "
-                  "deviation beyond its 95 % interval; see its figure's lower panel",
-                  file=sys.stderr)
+    for line in noise.fit_warnings():
+        print(f"warning: {line}", file=sys.stderr)
     if json_path:
         write_text(json_path, json.dumps(noise.to_dict(args.inflate), indent=1) + "\n")
     print(f"Allan noise report of {len(axes)} axes written to {out.resolve()}/"

@@ -195,6 +195,23 @@ class ImuNoise:
                            tuple(a.axis.column for a in self.axes), float(inflate),
                            gravity, told)
 
+    def fit_warnings(self) -> list[str]:
+        """Say, one sentence per axis, where the Allan fit misses the measured deviation.
+
+        Beyond the deviation's 95 % interval and by more than the allowed factor
+        (:meth:`fosmodel.noise.allan_fit.NoiseFit.misses`); empty when every fit holds.
+        """
+        out = []
+        for a in self.axes:
+            misses = a.fit.misses()
+            if misses:
+                tau, ratio = misses[0]
+                out.append(f"{a.axis.column}: the IEEE Std 952 fit misses the measured Allan "
+                           f"deviation beyond its 95 % interval at {len(misses)} averaging "
+                           f"time(s) (fit/data {ratio:.2f} at tau = {tau:.3g} s first); see "
+                           "its figure's lower panel")
+        return out
+
     def export_notes(self, inflate: float = 1.0) -> list[str]:
         """Say what the console should about the exports: each value clamped to its range.
 
@@ -232,11 +249,7 @@ class ImuNoise:
                  "N at tau = 1 s on the -1/2 line, K at 3 s on the +1/2 line, B = minimum / "
                  "0.664 (read-offs); in-run bias stability = the minimum of the deviation "
                  "(datasheet convention). '<' marks an upper limit (term not resolved)."]
-        for a in self.axes:
-            misses = a.fit.misses()
-            if misses:
-                notes.append(f"WARNING: {a.axis.column}: the fit misses the measured deviation "
-                             f"beyond its 95 % interval at {len(misses)} averaging time(s).")
+        notes += [f"WARNING: {line}." for line in self.fit_warnings()]
         return Summary("Allan noise parameters per axis (IEEE Std 952)", info, self.table(),
                        notes)
 
