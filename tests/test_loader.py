@@ -653,3 +653,17 @@ def test_a_second_time_column_is_left_unread(tmp_path):
     rec = load_record(p)
     assert rec.names == ["gx"] and rec.rate == pytest.approx(100)
     assert "column 'timestamp_ns' is another time column: the time is 'time'" in rec.notes[0]
+
+
+def test_a_warm_up_is_a_slow_excursion_not_outliers(tmp_path):
+    # a die temperature warming 15 C over the first half hour, on 0.01 C steps otherwise still
+    t = np.arange(360_000) / 100.0
+    temp = np.round(40.0 - 15.0 * np.exp(-t / 600.0)
+                    + np.random.default_rng(4).normal(0, 0.02, t.size), 2)
+    rec = load_record(_write(tmp_path, {"time": t, "temp_c": temp}))
+    slow = rec.outliers["temp_c"].size
+    assert slow > 1000
+    assert [n for n in rec.notes if n.startswith("column 'temp_c'")] == [
+        f"column 'temp_c': {slow} sample(s) outside [{_bounds(temp)[0]:.6g}, "
+        f"{_bounds(temp)[1]:.6g}] in runs of more than 3 samples, a slow excursion (a warm-up, "
+        "a drift): not counted as outliers, kept"]

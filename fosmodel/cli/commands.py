@@ -421,11 +421,10 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
         if joint is not None:
             write_text(tmp / "joint_model.json", json.dumps(joint.to_dict(), indent=1) + "\n")
     print(noise.summary())
-    for a in noise.axes:
-        if a.fit.misses():
-            print(f"warning: {a.axis.column}: the IEEE Std 952 fit misses the measured Allan "
-                  "deviation beyond its 95 % interval; see its figure's lower panel",
-                  file=sys.stderr)
+    for line in noise.export_notes(args.inflate):
+        print(f"warning: {line}", file=sys.stderr)
+    for line in noise.fit_warnings():
+        print(f"warning: {line}", file=sys.stderr)
     if json_path:
         write_text(json_path, json.dumps(noise.to_dict(args.inflate), indent=1) + "\n")
     print(f"Allan noise report of {len(axes)} axes written to {out.resolve()}/"

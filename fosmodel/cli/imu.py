@@ -133,6 +133,8 @@ def imu(args: argparse.Namespace) -> int:
     with report_directory(out, [args.file]) as tmp:
         write_imu_report(result, tmp, args.title or Path(args.file).name)
     print(console_summary(result))
+    for line in [*result.noise.fit_warnings(), *result.noise.export_notes(config.inflate)]:
+        print(f"warning: {line}", file=sys.stderr)
     if json_path:
         write_text(json_path, json.dumps(result.to_dict(), indent=1) + "\n")
     print(f"six-axis report of {len(axes)} axes written to {out.resolve()}/"

@@ -56,11 +56,22 @@ class Outliers(NamedTuple):
     spikes: np.ndarray
 
 
-def _in_spikes(index: np.ndarray) -> np.ndarray:
-    """Mark the sorted sample indices that lie in runs of at most ``SPIKE_RUN`` in a row."""
+def _in_spikes(x: np.ndarray, index: np.ndarray, limit: float) -> np.ndarray:
+    """Mark the sorted outlying indices that are spikes: glitches, not the signal moving.
+
+    A spike lies in a run of at most ``SPIKE_RUN`` outlying samples in a row and stands out
+    from its neighbours too: farther than ``limit`` from the median of the
+    ``4 SPIKE_RUN + 1`` samples around it.  Where a slow excursion (a warm-up) crosses the
+    bounds, noise splits it into short runs, but each of their samples is near its neighbours.
+    """
     starts = np.flatnonzero(np.diff(index, prepend=index[0] - 2) != 1)
     lengths = np.diff(starts, append=index.size)
-    return np.repeat(lengths <= SPIKE_RUN, lengths)
+    short = np.repeat(lengths <= SPIKE_RUN, lengths)
+    half = 2 * SPIKE_RUN
+    around = np.clip(index[short, None] + np.arange(-half, half + 1), 0, len(x) - 1)
+    local = np.median(np.asarray(x)[around], axis=1)
+    short[short] = np.abs(np.asarray(x)[index[short]] - local) > limit
+    return short
 
 
 def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
@@ -82,7 +93,7 @@ def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
             sigma = float(steps.min()) if steps.size else 0.0
         index = np.flatnonzero(deviation > OUTLIER_K * sigma)
         if sigma > 0 and index.size:
-            spikes = index[_in_spikes(index)]
+            spikes = index[_in_spikes(x, index, OUTLIER_K * sigma)]
             share = float(deviation[spikes] @ deviation[spikes]) / float(deviation @ deviation)
             found[name] = Outliers(index, center - OUTLIER_K * sigma, center + OUTLIER_K * sigma,
                                    share, spikes)
@@ -108,14 +119,23 @@ def handle_outliers(record: Record, found: dict[str, Outliers], mode: str,
         _refuse(record, found, rule, first_line)
     for name, out in found.items():
         bounds = f"[{out.low:.6g}, {out.high:.6g}]"
+        slow = out.samples.size - out.spikes.size
+        if mode in ("keep", "refuse") and slow:  # a warm-up or a drift: the signal itself
+            record.notes.append(
+                f"column {name!r}: {slow} sample(s) outside {bounds} in runs of more than "
+                f"{SPIKE_RUN} samples, a slow excursion (a warm-up, a drift): not counted as "
+                "outliers, kept")
+            if not out.spikes.size:
+                continue
         done = {"keep": "kept (outliers='clip' or 'drop' handles them)",
                 "refuse": (f"kept: they carry {_percent(out.share)} of its mean square about its "
                            f"median, under the {_percent(OUTLIER_SHARE)} at which the record is "
                            "refused (outliers='keep' or 'clip' or 'drop' says otherwise)"),
                 "clip": f"clipped to {bounds}", "drop": "dropped"}[mode]
+        counted = out.spikes if mode in ("keep", "refuse") else out.samples
         record.notes.append(
-            f"column {name!r}: {out.samples.size} outlier(s) ({rule}, outside {bounds}) at "
-            f"{positions(out.samples, first_line)}; {done}")
+            f"column {name!r}: {counted.size} outlier(s) ({rule}, outside {bounds}) at "
+            f"{positions(counted, first_line)}; {done}")
         if mode == "clip":
             record.data[name] = np.clip(record.data[name], out.low, out.high)
     if mode == "drop":

@@ -42,7 +42,7 @@ def effects_table(result: LoopResult) -> pd.DataFrame:
             **{f"Outage position error (m, {h} s)": v
                for h, v in m["outage_position_error_m"].items()},
             **{f"Outage MSE {h} s ({u})^2": v for h, v in m["outage_mse"].items()},
-            **{f"Bias RMS {t} s ({u})": v for t, v in m["bias_rms"].items()},
+            **{f"Free-run bias RMS {t} s ({u})": v for t, v in m["bias_rms"].items()},
             "Worse than the row above": ("" if s is result.before_scores
                                          else "; ".join(worse) or "nothing")})
         previous = s
@@ -278,7 +278,7 @@ def console_summary(result: LoopResult, width: int = CONSOLE_WIDTH) -> str:
     terms = ["-"] + [str(len(s.terms_added)) for s in result.steps]
     w = max(len(name) for name in names)
     columns = ("MSE", f"Outage pos. err. {horizon} s" if horizon else "Outage pos. err.",
-               f"Bias RMS {last} s")
+               f"Free-run bias RMS {last} s")
     table = [f"row  {'Model':<{w}}  Terms" + "".join(f"  {c:>10}" for c in columns)]
     for row, (name, count, m) in enumerate(zip(names, terms, metrics)):
         values = (m["mse"], m["outage_position_error_m"].get(horizon) if horizon else None,
@@ -298,7 +298,7 @@ def console_summary(result: LoopResult, width: int = CONSOLE_WIDTH) -> str:
                      + ", ".join(still_firing(result)))
     notes += [f"note: {note}" for note in result.notes]
     head = (f"prediction segment: MSE ({cfg.units or 'units'})^2, outage position error (m), "
-            f"bias RMS ({cfg.units or 'units'})")
+            f"free-run bias RMS ({cfg.units or 'units'})")
     return "\n".join([*textwrap.wrap(head, width), *(_clip(line, width) for line in table),
                       *(line for note in notes
                         for line in textwrap.wrap(note, width, subsequent_indent="    "))])

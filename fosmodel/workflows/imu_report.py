@@ -90,11 +90,12 @@ def write_imu_tables(result: ImuResult, out_dir: Path,
         "study": (result.study_table(), f"{title}: best FOS and best baseline of each axis "
                   f"(chosen on the evaluation segment), errors on {study}: outage error, the "
                   f"RMS position error at the end of {cfg.n_starts} free runs of "
-                  f"{cfg.horizon_s:g} s; bias RMS, the RMS of the one-step residual's 30 s "
-                  "means (in the axis's units)"),
+                  f"{cfg.horizon_s:g} s; one-step bias RMS, the RMS of the one-step residual's "
+                  "30 s means (in the axis's units)"),
         "loop": (result.loop_table(), f"{title}: the residual loop of each axis, errors on "
                  f"{loop} before and after the effects kept (outage error: at the end of "
-                 f"{cfg.horizon_s:g} s free runs; bias RMS in the axis's units)"),
+                 f"{cfg.horizon_s:g} s free runs; free-run bias RMS, the RMS of their 30 s mean "
+                 "errors, in the axis's units)"),
         "timing": (result.timing_table(), f"{title}: run time of each step"),
     }
     for stem, (frame, caption) in tables.items():
@@ -175,9 +176,10 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
     sections = [
         ("Noise parameters (Allan variance)", "noise",
          "IEEE Std 952 terms fitted to each axis's overlapping Allan deviation; exports for "
-         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/openvins_kalibr_imu_chain.yaml`), "
+         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/kalibr_imu_chain.yaml`), "
          "VINS-Mono/Fusion (`noise/vins_imu.yaml`), ORB-SLAM3 (`noise/orbslam3_imu.yaml`), "
-         "PX4 EKF2 (`noise/px4_ekf2.params`), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
+         "PX4 EKF2 (`noise/px4_ekf2.params` for QGroundControl, `noise/px4_ekf2_console.txt` "
+         "for the console), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
          "MATLAB (`noise/imu_params.m`) and JSON (`noise/imu_noise.json`)"
          + (f", inflated {result.config.inflate:g}x for a moving platform" if
             result.config.inflate != 1.0 else "")
@@ -195,10 +197,12 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
         frame, caption = tables[stem]
         lines += [f"## {heading}", "", text, "", f"Table: {caption}.", "",
                   markdown_table(frame, digits=4), ""]
-        if stem != "noise":
+        if stem == "noise":
+            lines += _noise_warnings(result.noise)
+        else:
             lines += [*_definitions(result, stem), ""]
         if stem == "loop":
-            lines += _loop_warnings(result)
+            lines += [*driver_notes(result), *_loop_warnings(result)]
     lines += ["## Error models for a filter", "",
               "- `filter/allan_model.json`: every axis's Allan error model (white noise, a "
               "first-order Gauss-Markov bias instability, a random-walk bias) as one "
@@ -233,8 +237,9 @@ def _definitions(result: ImuResult, stem: str) -> list[str]:
                                  study if stem == "study" else loop)
     same = (" (the study's: both steps score on one segment)" if study == loop
             else f" (not the study's {study.removeprefix('the ')})")
+    bias = defined["free_run_bias_rms" if stem == "loop" else "bias_rms"]
     lines = [f"- {defined['outage_position_error_m']}",
-             f"- {defined['bias_rms'].replace('(units)', '(the axis units)')}"]
+             f"- {bias.replace('(units)', '(the axis units)')}"]
     if stem == "loop":
         lines.insert(0, f"- Errors on {loop}{same}, of the loop's starting model (before) and "
                         "final model (after).")
@@ -242,6 +247,30 @@ def _definitions(result: ImuResult, stem: str) -> list[str]:
         lines.append("- FOS / baseline (outage): the first outage error over the second; below "
                      "1, FOS does better.")
     return ["What the columns are:", "", *lines]
+
+
+def _noise_warnings(noise: ImuNoise) -> list[str]:
+    """Warn, one line per axis, where the Allan fit misses the measured deviation."""
+    lines = [f"- WARNING: {line} (`noise/axes/{path_name(line.split(':')[0])}/`)."
+             for line in noise.fit_warnings()]
+    return [*lines, ""] if lines else []
+
+
+def driver_notes(result: ImuResult) -> list[str]:
+    """Say which auxiliary channels served as the loops' drivers, and which axes kept them.
+
+    A channel such as ``temp_c`` is offered to every axis's loop as a measured cause (its slow
+    and fast parts), never analysed as an axis of its own; its own excursions (a warm-up) are
+    the driver's signal, not outliers of an axis.
+    """
+    out = []
+    for name in result.aux:
+        using = [a.axis.column for a in result.axes
+                 if any(name in s.effect.describe() for s in a.loop.steps)]
+        out.append(f"{name} served as a driver: each axis's loop was offered it as a measured "
+                   "cause (its slow and fast parts), judged on data the model was not fitted "
+                   "on; " + (f"kept on {', '.join(using)}." if using else "kept on no axis."))
+    return [*out, ""] if out else []
 
 
 def _loop_warnings(result: ImuResult) -> list[str]:
