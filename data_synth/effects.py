@@ -305,19 +305,26 @@ class BiasStep(Source):
 
 @dataclass(frozen=True)
 class Drift(Source):
-    """Linear and exponential (warm-up) drift ``slope_per_h*t/3600 + A (1 - exp(-t/tau))``."""
+    """Linear and exponential (warm-up) drift ``slope_per_h*t/3600 + A (1 - exp(-t/tau))``.
+
+    ``t`` is the time since ``start_s`` (0 before it): a warm-up that starts late, as a
+    sensor's heater switched on some minutes into the record.
+    """
 
     slope_per_h: float = 0.0
     warmup_amplitude: float = 0.0
     warmup_tau_s: float = 1.0
+    start_s: float = 0.0
     kind: ClassVar[str] = "drift"
 
     def __post_init__(self):
         if self.warmup_tau_s <= 0:
             raise ValueError(f"{self.label}: warmup_tau_s must be > 0")
+        if not (math.isfinite(self.start_s) and self.start_s >= 0):
+            raise ValueError(f"{self.label}: start_s must be >= 0, got {self.start_s!r}")
 
     def generate(self, n, rate, rng, inputs=None):
-        t = _time(n, rate)
+        t = np.maximum(_time(n, rate) - self.start_s, 0.0)
         return self.slope_per_h * t / 3600.0 + self.warmup_amplitude * -np.expm1(
             -t / self.warmup_tau_s
         )
@@ -327,8 +334,65 @@ class Drift(Source):
             "slope_per_h": self.slope_per_h,
             "warmup_amplitude": self.warmup_amplitude,
             "warmup_tau_s": self.warmup_tau_s,
-            "formula": "slope_per_h*t/3600 + warmup_amplitude*(1 - exp(-t/warmup_tau_s)), t in s",
-            "units": {"slope_per_h": f"{units}/h", "warmup_amplitude": units, "warmup_tau_s": "s"},
+            "start_s": self.start_s,
+            "formula": "slope_per_h*t/3600 + warmup_amplitude*(1 - exp(-t/warmup_tau_s)), "
+            "t = max(time - start_s, 0) in s",
+            "units": {"slope_per_h": f"{units}/h", "warmup_amplitude": units,
+                      "warmup_tau_s": "s", "start_s": "s"},
+        }
+
+
+@dataclass(frozen=True)
+class Knocks(Source):
+    """Knocks: ``count`` bursts of ``knock_s`` seconds each, at times drawn over the record.
+
+    Each burst is a decaying oscillation (``amplitude`` at its start, ``freq_hz``, falling
+    to 1 % by its end): what a bench bumped or a door slammed leaves on a static record.
+    The times are drawn uniformly (the source's own stream), a knock's length apart at
+    least.
+    """
+
+    count: int
+    amplitude: float
+    knock_s: float = 0.05
+    freq_hz: float = 20.0
+    kind: ClassVar[str] = "knocks"
+
+    def __post_init__(self):
+        if not (isinstance(self.count, (int, np.integer)) and self.count >= 1):
+            raise ValueError(f"{self.label}: count must be a positive integer, got {self.count!r}")
+        if not (math.isfinite(self.knock_s) and self.knock_s > 0):
+            raise ValueError(f"{self.label}: knock_s must be > 0, got {self.knock_s!r}")
+
+    def starts(self, n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
+        """The first sample of each knock, sorted."""
+        width = max(1, round(self.knock_s * rate))
+        slots = (n - width) // (2 * width)  # a knock's length of quiet after each
+        if slots < self.count:
+            raise ValueError(f"{self.label}: {self.count} knocks of {self.knock_s:g} s do not "
+                             f"fit in {n / rate:g} s")
+        return np.sort(rng.choice(slots, self.count, replace=False)) * 2 * width
+
+    def generate(self, n, rate, rng, inputs=None):
+        width = max(1, round(self.knock_s * rate))
+        t = np.arange(width) / rate
+        burst = self.amplitude * np.exp(np.log(0.01) * t / self.knock_s) * np.cos(
+            2 * np.pi * self.freq_hz * t)
+        out = np.zeros(n)
+        for start in self.starts(n, rate, rng):
+            out[start : start + width] += burst
+        return out
+
+    def params(self, rate, units, out):
+        width = max(1, round(self.knock_s * rate))
+        hit = np.flatnonzero(np.abs(out) > 0)
+        first = hit[np.r_[True, np.diff(hit) > width]] if len(hit) else hit
+        return {
+            "count": self.count, "amplitude": self.amplitude, "knock_s": self.knock_s,
+            "freq_hz": self.freq_hz, "times_s": [float(i / rate) for i in first],
+            "formula": "amplitude*exp(ln(0.01)*t/knock_s)*cos(2 pi freq_hz t) for t in "
+            "[0, knock_s) after each time",
+            "units": {"amplitude": units, "knock_s": "s", "freq_hz": "Hz", "times_s": "s"},
         }
 
 

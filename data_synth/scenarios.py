@@ -39,6 +39,7 @@ from data_synth.effects import (
     BiasStep,
     ConstantBias,
     Drift,
+    Knocks,
     Quantizer,
     ScaleFactorError,
     TemperatureBias,
@@ -686,6 +687,65 @@ def _slow_random_walk_temperature():
 def _slow_warmup_drift_temperature():
     return _slow(Drift(1.2, 0.2, 300.0, declared=False, name="drift"), *_switched_temperature(),
                  temp_c="degC")
+
+
+# --- effects that begin inside the record, a driver on a short record -----------------------
+
+
+@_register("slow_step_third", SLOW_DURATION, LOOP_RATE,
+           "AR(3) + white noise plus an undeclared bias step (+0.15 deg/s, or amplitude) a "
+           "third of the way in: after the earliest origins of the judge")
+def _slow_step_third(duration, amplitude: float = 0.15):
+    return _slow(BiasStep((duration / 3,), (amplitude,), declared=False, name="bias_step"))
+
+
+@_register("slow_late_warmup", SLOW_DURATION, LOOP_RATE,
+           "AR(3) + white noise plus an undeclared 0.2 deg/s warm-up (tau_s, default 60 s) "
+           "that starts a third of the way in (or at start_s)")
+def _slow_late_warmup(duration, tau_s: float = 60.0, start_s: float | None = None):
+    start = duration / 3 if start_s is None else start_s
+    return _slow(Drift(0.0, 0.2, tau_s, start_s=start, declared=False, name="drift"))
+
+
+#: The short record with a measured driver: ten minutes, as a bench record of a MEMS IMU
+#: with its die temperature.
+SHORT_DURATION = 600.0
+
+
+def _cooling_temperature() -> list:
+    """temp_c of a die settling after turn-on: 27 C cooling by 2 C with a 200 s time constant,
+    read in steps of 1/340 C (an MPU-6050's) with 0.002 C noise per sample.  Over ten minutes it
+    follows time: a trend fitted there could not be told from it."""
+    return [WarmUp(27.0, -2.0, 200.0, channel="temp_c", name="temp_cooling"),
+            WhiteNoise(0.0002, channel="temp_c", name="temp_noise")]
+
+
+@_register("short_driver", SHORT_DURATION, LOOP_RATE,
+           "Ten minutes: AR(3) + white noise plus an undeclared 0.03 deg/s/C bias (or "
+           "sensitivity) in a cooling temp_c, and a bias random walk of walk_k (default none)")
+def _short_driver(sensitivity: float = 0.03, walk_k: float = 0.0):
+    walk = [RandomWalk(walk_k, declared=False, name="bias_walk")] if walk_k else []
+    bias = [TemperatureBias((0.0, sensitivity), t_ref_c=25.0, declared=False,
+                            name="temperature_bias")] if sensitivity else []
+    spec = _slow(*walk, *_cooling_temperature(), *bias, temp_c="degC")
+    spec["quantizers"] = {"temp_c": Quantizer(1.0 / 340.0)}
+    return spec
+
+
+_register("short_driver_control", SHORT_DURATION, LOOP_RATE,
+          "Control: short_driver without the temperature effect (same draws per seed)",
+          fixed={"sensitivity": 0.0})(_short_driver)
+
+
+@_register("companion_knocks", 1800.0, 100.0,
+           "Static six-axis IMU (as static_imu) whose companion column (az_mps2) carries "
+           "count knocks (39 of 0.05 s, 5 m/s^2): spikes on a column the gyro's loop does "
+           "not analyse")
+def _companion_knocks(column: str = "az_mps2", count: int = 39, knock_s: float = 0.05,
+                      amplitude: float = 5.0):
+    spec = _static_imu()
+    spec["sources"].append(Knocks(count, amplitude, knock_s, channel=column, name="knocks"))
+    return spec
 
 
 # --- six-axis records of one sensor: temperature sweeps, sessions, shared noise ---------------

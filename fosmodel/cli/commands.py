@@ -324,8 +324,10 @@ def _loop_outputs(args: argparse.Namespace, result: LoopResult | SessionsResult,
     with report_directory(out, args.files) as tmp:
         write_report(tmp)
     if model_path:
-        meta = {**meta, "effects": [step.effect.describe() for step in result.steps]}
-        write_model(model_path, result.final_model.model, meta)
+        bound, which = result.handed_on()
+        meta = {**meta, "effects": [step.effect.describe() for step in result.steps],
+                "model": which}
+        write_model(model_path, bound.model, meta)
     print(console)
     if json_path:
         write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")

@@ -234,8 +234,9 @@ def close_loop(
         if not candidates:
             break
         say(f"round {len(steps) + 1}: {len(candidates)} effect(s) to try")
-        chosen, refused, waiting = run_round(fitter, Judge(fitter, current, family, judged), family,
-                                             candidates, record, say, len(steps) + 1)
+        judge = Judge(fitter, current, family, judged, added)
+        chosen, refused, waiting = run_round(fitter, judge, family, candidates, record, say,
+                                             len(steps) + 1)
         rejected += refused
         if chosen is None or chosen.family is None or chosen.model is None:
             break
@@ -252,7 +253,8 @@ def close_loop(
     return LoopResult(config, segments, roles, before, steps[-1].predict if steps else before,
                       steps, rejected, findings_before, findings, base, current, judged,
                       reported, residual(base, y, stop), residual(current, y, stop),
-                      tuple(taus), notes(record, diagnose, family, judged, reported, roles))
+                      tuple(taus), notes(record, diagnose, family, judged, reported, roles)
+                      + judged_notes(steps))
 
 
 def judge_plan(segment: slice, config: LoopConfig) -> Plan:
@@ -286,6 +288,11 @@ def notes(record: LoopRecord, diagnose: Diagnostics, family: CandidateFamily, ju
     if roles.companions:
         out.append(f"channels by role: {roles.describe()}")
     return out
+
+
+def judged_notes(steps: list[Step]) -> list[str]:
+    """Say of each kept effect judged otherwise than the rest how it was (an onset, a horizon)."""
+    return [f"{s.effect.describe()}: {s.judgement.note}" for s in steps if s.judgement.note]
 
 
 def _driven(family: CandidateFamily) -> set[str]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -12,7 +13,15 @@ from ..models.model import FOSModel
 from .config import LoopConfig
 from .driver_forms import forms_p, refit_forms
 from .effects import CandidateFamily, Effect
-from .judge import Forecasts, Judgement, compare, forecasts, verdict
+from .judge import (
+    ONSET_REFIT_SLOWS,
+    Forecasts,
+    Judgement,
+    compare,
+    forecasts,
+    losses_text,
+    verdict,
+)
 from .record import LoopRecord
 from .scores import Plan, plan
 
@@ -123,14 +132,16 @@ class Judge:
     """Judges trial models against the current one out of sample (:mod:`fosmodel.loop.judge`).
 
     The current model's refits and forecasts from every origin are computed once
-    per round.  An origin from which a trial's new terms cannot be estimated (a
-    step after it: the refit drops them; a driver's forms its past does not tell from
-    none) cannot judge it, and is left out.
+    per round.  An origin that cannot judge a trial is left out: one before its effect's
+    onset or too soon after it (:data:`fosmodel.loop.judge.ONSET_REFIT_SLOWS`), one from
+    which its new terms cannot be estimated (the refit drops them), one whose past does not
+    tell a driver's forms from none.
     """
 
     def __init__(self, fitter: Fitter, current: BoundModel, family: CandidateFamily,
-                 where: Plan) -> None:
+                 where: Plan, added: Sequence[Effect] = ()) -> None:
         self.fitter, self.where, self.family = fitter, where, family
+        self.added = tuple(added)  # the current model's effects: their onsets count too
         self.y, config = fitter.record.y, fitter.config
         end = fitter.train.stop
         self.origins = np.unique(np.linspace(end / 2, end, config.origins).round().astype(int))
@@ -138,31 +149,54 @@ class Judge:
             self.origins = self.origins[-1:]  # too short a past to refit on
         self.refits = [self._refit(current, family, o) for o in self.origins]
         self.current = [self._forecasts(m) for m in self.refits]
-        self.beyond = self._beyond_plan(where)
-        self.beyond_current = self._beyond(self.refits[0]) if self.beyond else None
+        self._beyond_plans: dict[int, tuple[Plan, Forecasts] | None] = {}
 
-    def _beyond_plan(self, where: Plan) -> Plan | None:
-        """Return where the earliest origin judges what the evaluation segment holds too few of.
+    def _beyond_at(self, index: int) -> tuple[Plan, Forecasts] | None:
+        """Return where the origin ``index`` judges what the evaluation segment holds too few of.
 
         Unseen by the refits at that origin, the stretch from it to the evaluation segment's
         end may hold enough of them to judge: a horizon is not passed unjudged where it can
-        be judged there.
+        be judged there.  With the current model's forecasts there; None if it holds none.
         """
-        if len(self.origins) < 2 or not where.skipped:
-            return None
-        beyond = plan(slice(int(self.origins[0]), where.segment.stop), tuple(where.skipped),
-                      self.fitter.config.rate, self.fitter.config.n_starts,
-                      "earliest origin's unseen")
-        return beyond if beyond.horizons else None
+        if index not in self._beyond_plans:
+            where, config = self.where, self.fitter.config
+            found = None
+            if where.skipped and index < len(self.origins) - 1:
+                beyond = plan(slice(int(self.origins[index]), where.segment.stop),
+                              tuple(where.skipped), config.rate, config.n_starts,
+                              "earliest origin's unseen")
+                if beyond.horizons:
+                    found = beyond, self._beyond(self.refits[index], beyond)
+            self._beyond_plans[index] = found
+        return self._beyond_plans[index]
 
-    def _beyond(self, model: BoundModel) -> Forecasts:
-        assert self.beyond is not None
-        return forecasts(model, self.y, self.beyond.segment, self.beyond.horizons)
+    def _beyond(self, model: BoundModel, where: Plan) -> Forecasts:
+        return forecasts(model, self.y, where.segment, where.horizons)
 
     @property
     def origins_s(self) -> tuple[float, ...]:
         """The fit origins in seconds, the fitting segment's end last."""
         return tuple(float(o / self.fitter.config.rate) for o in self.origins)
+
+    def onset_s(self, effect: Effect) -> float | None:
+        """Return the latest onset of ``effect`` and of the current model's effects, or None.
+
+        From an origin before a step already in, the current model's refit has lost it as
+        the trial's has: the two compare models of a record neither has seen.
+        """
+        onsets = [o for e in (*self.added, effect) for o in [e.onset_s()] if o is not None]
+        return max(onsets) if onsets else None
+
+    def can_judge(self, origin: int, effect: Effect) -> bool:
+        """Whether ``origin`` (a sample) lies far enough after the onsets to judge ``effect``.
+
+        :data:`fosmodel.loop.judge.ONSET_REFIT_SLOWS` times ``slow_s`` after its onset and
+        the current model's effects' (:meth:`onset_s`) at least; with no onset, from every
+        origin.
+        """
+        onset = self.onset_s(effect)
+        config = self.fitter.config
+        return onset is None or origin / config.rate >= onset + ONSET_REFIT_SLOWS * config.slow_s
 
     def _refit(self, model: BoundModel, family: CandidateFamily, origin: int) -> BoundModel:
         if origin == self.origins[-1]:
@@ -207,24 +241,64 @@ class Judge:
                  effect: Effect) -> Judgement:
         """Judge ``trial``: at the fitting segment's end, then from the earlier origins.
 
-        The earlier origins are looked at only for a trial that passes at the end.
+        The earlier origins are looked at only for a trial that passes at the end, and only
+        those that can judge its effect (:meth:`can_judge`); the horizons the evaluation
+        segment holds too few windows of, from the earliest of them on.
         """
         alpha = self.fitter.config.accept_alpha
         last = compare(self.current[-1], self._forecasts(trial))
         if verdict(last, None, alpha, effect.strict) is None:
-            return Judgement(last, self.origins_s, None, None)
-        found = [self._earlier(trial, family, o, m, f) for o, m, f in
-                 zip(self.origins[:-1], self.refits[:-1], self.current[:-1])]
+            return Judgement(last, self.origins_s, None, None, reason=losses_text(last, alpha))
+        able = [i for i, o in enumerate(self.origins[:-1]) if self.can_judge(int(o), effect)]
+        found = [self._earlier(trial, family, int(self.origins[i]), self.refits[i],
+                               self.current[i]) if i in able else None
+                 for i in range(len(self.origins) - 1)]
+        note = self._onset_note(effect, able)
         kept = verdict(last, [f for f in found if f is not None], alpha, effect.strict)
-        if kept is None or self.beyond is None or self.beyond_current is None:
-            return Judgement(last, self.origins_s, tuple(found), kept)
-        refit = self._refit(trial, family, int(self.origins[0]))
-        beyond = compare(self.beyond_current, self._beyond(refit))[1:]  # the one-step is judged
-        lost = [c.label for c in beyond if c.loses(alpha)]
-        judgement = Judgement(last, self.origins_s, tuple(found), kept, beyond=beyond)
+        beyond_at = self._beyond_at(able[0]) if able else None
+        if kept is None or beyond_at is None:
+            unjudged = self._unjudged(beyond_at)
+            return Judgement(last, self.origins_s, tuple(found), kept, note=_join(note, unjudged))
+        where, base = beyond_at
+        refit = self._refit(trial, family, int(self.origins[able[0]]))
+        beyond = compare(base, self._beyond(refit, where))[1:]  # the one-step is judged
+        judgement = Judgement(last, self.origins_s, tuple(found), kept, beyond=beyond,
+                              note=_join(note, self._unjudged(beyond_at)))
+        lost = losses_text(beyond, alpha)
         if lost:
             return judgement.held_back(
-                f"loses beyond noise on the {', '.join(lost)}, which the evaluation segment "
-                f"holds too few windows of, judged from the earliest origin "
-                f"({self.origins_s[0]:g} s) on")
+                f"{lost}, which the evaluation segment holds too few windows of, judged from "
+                f"the origin at {self.origins_s[able[0]]:g} s on")
         return judgement
+
+    def _onset_note(self, effect: Effect, able: list[int]) -> str | None:
+        """Say so when an onset left the effect to fewer origins, or to none."""
+        earlier, onset = len(self.origins) - 1, self.onset_s(effect)
+        if onset is None or not earlier or len(able) == earlier:
+            return None
+        whose = "its onset" if onset == effect.onset_s() else "the onset of an effect in the model"
+        if not able:
+            return (f"judged on the evaluation segment alone, by the strict rule: no earlier "
+                    f"origin has {ONSET_REFIT_SLOWS * self.fitter.config.slow_s:g} s after "
+                    f"{whose} ({onset:.4g} s) to refit on")
+        return (f"judged from the origins at {self.origins_s[able[0]]:g} s on: the earlier "
+                f"ones precede {whose} ({onset:.4g} s) or follow it too closely")
+
+    def _unjudged(self, beyond_at: tuple[Plan, Forecasts] | None) -> str | None:
+        """Name the horizons the earliest origin judges but none that can judge the effect does.
+
+        Those no origin holds enough windows of are unjudged for every effect: the notes
+        say so once.
+        """
+        judged = set(beyond_at[0].horizons) if beyond_at else set()
+        earliest = self._beyond_at(0)
+        missing = [h for h in (earliest[0].horizons if earliest else ()) if h not in judged]
+        if not missing:
+            return None
+        return ("unjudged at the " + ", ".join(f"{h:g} s" for h in missing)
+                + " outage bias: too few windows from the origins that can judge it")
+
+
+def _join(*parts: str | None) -> str | None:
+    found = [p for p in parts if p]
+    return "; ".join(found) or None

@@ -21,8 +21,15 @@ refitted (their weights, :meth:`fosmodel.models.model.FOSModel.refit_weights`) o
 shorter pasts ending at earlier origins, and judged on the same evaluation
 segment, now further from their fitting data.
 
+An origin that cannot have seen an effect does not judge it: an effect with an onset
+(a step's time, :meth:`fosmodel.loop.effects.Effect.onset_s`) is judged only from the
+origins with :data:`ONSET_REFIT_SLOWS` times ``slow_s`` of data after it, where its
+weight can be refitted (from an origin before a step any model of the step looks wrong).
+
 The verdict (:func:`verdict`): an effect is kept if it gains beyond noise on
-some error kind at some horizon and loses beyond noise on none.
+some error kind at some horizon, loses beyond noise on none, and loses no more than
+:data:`MAX_POINT_LOSS` of any horizon's outage bias however few the windows: a quarter
+more bias at 300 s is no noise to a navigation filter, whatever its p-value.
 
 References
 ----------
@@ -63,6 +70,13 @@ MIN_GAIN = 1e-3
 #: finer than a report's intervals resolve and than a filter's bias model would notice (an
 #: accelerometer's fast part gained 0.2-0.5 % on a static gyro's 30 min outages).
 MIN_OUTAGE_GAIN = 1e-2
+#: Largest share of an outage bias's sum of squares an effect may add at any horizon and still
+#: be kept on its gains elsewhere (its point estimate, however few the windows).
+MAX_POINT_LOSS = 0.1
+#: Data an origin needs after an effect's onset to judge it, in units of ``slow_s``: the
+#: effect's weight is then a mean over that much at least, where the fast noise has averaged
+#: out.
+ONSET_REFIT_SLOWS = 1.0
 ONE_STEP, OUTAGE = "one_step", "outage"
 BATCHES = 10  # groups of one-step errors of the encompassing test
 
@@ -154,6 +168,14 @@ class Comparison:
         """Whether the trial makes these errors worse beyond noise (at ``alpha / 2``)."""
         return self.p_worse < alpha / 2
 
+    def loses_much(self) -> bool:
+        """Whether it adds more than :data:`MAX_POINT_LOSS` to an outage bias's sum of squares.
+
+        The point estimate, whatever the windows: a navigation filter suffers the loss the
+        windows measured, significant or not.
+        """
+        return self.kind == OUTAGE and self.gain < -MAX_POINT_LOSS
+
     def to_dict(self) -> dict[str, Any]:
         """Return the comparison as JSON."""
         return {**asdict(self), "halves": list(self.halves) if self.halves else None}
@@ -243,6 +265,8 @@ class Judgement:
     evaluation segment holds too few windows of, from the earliest origin on (where that
     stretch holds enough; :class:`fosmodel.loop.fitting.Judge`).  Over several sessions
     ``last`` pools every held-out session's comparisons and ``sessions`` holds each one's.
+    ``note`` says how it was judged where that differs from the rest: an onset that left it
+    to fewer origins, or none, and the horizons it is unjudged at.
     """
 
     last: tuple[Comparison, ...]
@@ -252,6 +276,7 @@ class Judgement:
     reason: str | None = None
     sessions: tuple[tuple[Comparison, ...], ...] | None = None
     beyond: tuple[Comparison, ...] = ()
+    note: str | None = None
 
     @property
     def accepted(self) -> bool:
@@ -299,6 +324,7 @@ class Judgement:
                 "gains_from_origins": None if self.earlier is None else
                 {c.key: self.gains(c.key) for c in self.last},
                 "kept_on": self.kept_on, "accepted": self.accepted, "reason": self.reason,
+                "note": self.note,
                 "beyond_evaluation": {c.key: c.to_dict() for c in self.beyond},
                 **({} if self.sessions is None else {"sessions": [
                     {c.key: c.to_dict() for c in each} for each in self.sessions]})}
@@ -309,7 +335,8 @@ def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]] 
     """Return the key of the comparison a candidate is kept on, or None.
 
     It must pass (:meth:`Comparison.passes`) at the fitting segment's end on some error
-    kind at some horizon and lose beyond noise (:meth:`Comparison.loses`) on none.  A
+    kind at some horizon, lose beyond noise (:meth:`Comparison.loses`) on none and no more
+    than :data:`MAX_POINT_LOSS` of any outage bias (:meth:`Comparison.loses_much`).  A
     ``strict`` candidate (one that could run on beyond its data: a function of time, and
     fast effects, which are cheap to judge) must also gain on each half of the segment and
     lose nothing on the comparison it passes from any earlier origin (gain above
@@ -322,7 +349,7 @@ def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]] 
     after every earlier origin).  ``earlier`` None: the earlier origins are not looked at
     yet, and nothing is asked of them.
     """
-    if any(c.loses(alpha) for c in last):
+    if any(c.loses(alpha) or c.loses_much() for c in last):
         return None
     kept = []
     for c in last:
@@ -337,3 +364,14 @@ def verdict(last: tuple[Comparison, ...], earlier: list[tuple[Comparison, ...]] 
         if mean > 0:
             kept.append((mean, c.key))
     return max(kept)[1] if kept else None
+
+
+def losses_text(comparisons: Iterable[Comparison], alpha: float) -> str | None:
+    """Say what a trial loses, beyond noise or more than :data:`MAX_POINT_LOSS`; None: nothing."""
+    noisy = [c.label for c in comparisons if c.loses(alpha)]
+    large = [f"{c.label} ({-c.gain:.1%} more sum of squares)" for c in comparisons
+             if c.loses_much() and not c.loses(alpha)]
+    parts = ([f"loses beyond noise on the {', '.join(noisy)}"] if noisy else []) + (
+        [f"loses more than {MAX_POINT_LOSS:.0%} on the {', '.join(large)}, not kept on "
+         "gains elsewhere however few its windows"] if large else [])
+    return "; ".join(parts) or None

@@ -80,6 +80,25 @@ class BeforeAfter:
 
     before_scores: Scores
     after_scores: Scores
+    steps: Sequence[object]
+    base_model: BoundModel
+    final_model: BoundModel
+
+    def worse(self) -> list[str]:
+        """Return the ratios whose interval lies above 1: what the final model made worse."""
+        raise NotImplementedError
+
+    def handed_on(self) -> tuple[BoundModel, str]:
+        """Return the model to save or export, and which it is in words.
+
+        The final model, or the starting one when the effects kept made the prediction
+        segment worse beyond an interval: the loop never hands on a model that makes
+        unseen data worse.  ``close-loop --model`` and ``imu`` save the same one.
+        """
+        if self.steps and self.worse():
+            return self.base_model, ("the loop's starting model (its effects made the "
+                                     "prediction segment worse)")
+        return self.final_model, "the loop's final model"
 
     @property
     def before(self) -> dict[str, Any]:

@@ -152,10 +152,7 @@ def _write_model(result: ImuResult, a: AxisResult, folder: Path) -> tuple[Path, 
     The starting model is saved when the effects kept made the prediction segment worse;
     return the file and which model it holds.
     """
-    worse = a.loop.worse()
-    bound, which = ((a.loop.base_model, "the loop's starting model (its effects made the "
-                     "prediction segment worse)") if worse and a.loop.steps
-                    else (a.loop.final_model, "the loop's final model"))
+    bound, which = a.loop.handed_on()
     path = folder / f"{path_name(a.axis.column)}.json"
     meta = {"source": result.source, "column": a.axis.column, "units": a.axis.units,
             "sensor": a.axis.sensor, "rate_hz": result.rate, "n_samples": result.n_samples,

@@ -10,8 +10,8 @@ evidence, and four things its class says:
 * its label (:meth:`Effect.describe`) and JSON form (:meth:`Effect.to_dict`,
   :func:`effect_from_dict`);
 * its acceptance rule: judged ``strict`` or not (:mod:`fosmodel.loop.judge`),
-  the kinds it ``waits_for`` when they are accepted in the same round, and
-  whether several sessions may share it (``pooled``).
+  from which origins (its ``onset_s``), the kinds it ``waits_for`` when they are
+  accepted in the same round, and whether several sessions may share it (``pooled``).
 
 A kind is one module of this package with one class under :func:`register`;
 the package imports every module in it, so adding a kind touches nothing else.
@@ -115,6 +115,14 @@ class Effect(metaclass=_Registered):
         runs only as its measured cause does (a driver's slow part) is not.
         """
         return True
+
+    def onset_s(self) -> float | None:
+        """Return the time (s) the effect begins at inside the record, or None: from its start.
+
+        An origin of the judge before it, or too soon after it to refit its weight, cannot
+        judge it (:data:`fosmodel.loop.judge.ONSET_REFIT_SLOWS`).
+        """
+        return None
 
     def identity(self) -> tuple:
         """Return what tells two effects of this kind apart (one of a kind by default)."""

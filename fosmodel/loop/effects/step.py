@@ -16,7 +16,8 @@ class Step(Effect):
     """``step@<time>s``, 0 before the step the CUSUM test found and 1 after it.
 
     A function of time: it waits for the level and the drivers accepted in the same round,
-    and is judged strictly.  One record's: a step's time does not carry to another session.
+    and is judged strictly, from the origins after its time.  One record's: a step's time does
+    not carry to another session.
     """
 
     kind = "step"
@@ -33,6 +34,10 @@ class Step(Effect):
     def add_to(self, family: CandidateFamily, record: LoopRecord) -> CandidateFamily:
         """Add the step column."""
         return family.with_columns([step_name(self.time_s)], record)
+
+    def onset_s(self) -> float | None:
+        """Return the step's time: an origin before it has not seen it."""
+        return self.time_s
 
     def describe(self) -> str:
         """``step at 105 s``."""
