@@ -45,6 +45,7 @@ if TYPE_CHECKING:
         NonlinearStateSpace,
         StateSpace,
         position_velocity_error_model,
+        tilt_error_model,
         to_nonlinear_state_space,
         to_state_space,
     )
@@ -59,7 +60,7 @@ else:
         "joint_noise": ("JointNoise",),
         "kalman": ("FilterRun", "KalmanFilter", "run_filter"),
         "statespace": ("NonlinearStateSpace", "StateSpace", "position_velocity_error_model",
-                       "to_nonlinear_state_space", "to_state_space"),
+                       "tilt_error_model", "to_nonlinear_state_space", "to_state_space"),
     })
 
 __all__ = [
@@ -69,5 +70,5 @@ __all__ = [
     "constant_gain_filter", "correlation", "covariance", "cross_gyro_comparison",
     "initial_covariance", "kalman_angle_std", "model_adev", "model_terms",
     "position_velocity_error_model", "recursive_gain", "run_filter", "steady_state_gain",
-    "to_nonlinear_state_space", "to_state_space",
+    "tilt_error_model", "to_nonlinear_state_space", "to_state_space",
 ]
