@@ -101,3 +101,36 @@ def test_a_nonlinear_final_model_is_written_for_an_ekf_and_not_judged(tmp_path):
     back = read_filter_file(path)
     assert json.loads(path.read_text())["kind"] == "nonlinear"
     assert np.all(np.linalg.eigvalsh(back.P0) > 0)
+
+
+def test_close_loop_writes_the_filter_files_and_the_model_refitted_on_all(tmp_path, capsys):
+    import pandas as pd
+
+    from fosmodel import FOSModel, cli
+
+    y, channels = _driven_accel()
+    rec = tmp_path / "rec.csv"
+    pd.DataFrame({"time": np.arange(N) / RATE, "ax_mps2": y, **channels}).to_csv(rec,
+                                                                                index=False)
+    out, js, model = tmp_path / "loop", tmp_path / "loop.json", tmp_path / "final.json"
+    code = cli.main([str(a) for a in ["close-loop", rec, "--column", "ax_mps2", "--units",
+                                      "m/s^2", "--out", out, "--json", js, "--model", model]])
+    _, err = capsys.readouterr()
+    assert code == 0, err
+    data = json.loads(js.read_text())
+    assert data["filter"]["recommended"] == "loop final model"
+    assert data["filter"]["files"] == {"loop final model": "loop_model.json",
+                                       "Allan model": "allan_model.json"}
+    for name in data["filter"]["files"].values():
+        assert read_filter_file(out / "filter" / name).system.rate == RATE
+    report = (out / "report.md").read_text()
+    assert "## The filter" in report and "Recommended: loop final model." in report
+    assert "its weights were refitted on all the data given (30000 samples)" in report
+    saved = json.loads(model.read_text())
+    assert saved["meta"]["fitted_on"] == ("all the record; structure chosen on the close-loop "
+                                          "segments")
+    written = read_filter_file(out / "filter" / "loop_model.json").system
+    refit = FOSModel.from_dict(saved)
+    from fosmodel.filter import to_state_space
+
+    np.testing.assert_allclose(written.Phi, to_state_space(refit).Phi, rtol=1e-12)

@@ -131,6 +131,11 @@ class Handoff:
                                     "(Allan variance fit)"})
         return paths
 
+    def append_to(self, report: Path, heading: str = "## The filter") -> None:
+        """Append :meth:`text` under ``heading`` to the Markdown page ``report``."""
+        with open(report, "a", encoding="utf-8") as fh:
+            fh.write(f"\n{heading}\n\n{self.text()}")
+
     def to_dict(self) -> dict[str, Any]:
         """Return the JSON output's ``"filter"`` entry (the files relative to ``filter/``)."""
         return {"files": {k: v for k, v in FILES.items() if k == LOOP or self.allan},
