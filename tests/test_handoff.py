@@ -134,3 +134,33 @@ def test_close_loop_writes_the_filter_files_and_the_model_refitted_on_all(tmp_pa
     from fosmodel.filter import to_state_space
 
     np.testing.assert_allclose(written.Phi, to_state_space(refit).Phi, rtol=1e-12)
+
+
+def test_imu_writes_each_axis_s_filter_models_and_a_section(tmp_path, capsys):
+    import pandas as pd
+
+    from fosmodel import cli
+
+    rec = make_scenario("static_imu", duration=300.0, seed=5)
+    path = tmp_path / "imu.csv"
+    pd.DataFrame({"time": np.arange(30_000) / 100.0, **rec.columns}).to_csv(path, index=False)
+    out, js = tmp_path / "report", tmp_path / "imu.json"
+    code = cli.main([str(a) for a in [
+        "imu", path, "--columns", "gx_dps,ax_mps2", "--split", "60s,60s", "--orders", "1-2",
+        "--methods", "fos,burg", "--jobs", "1", "--out", out, "--json", js]])
+    _, err = capsys.readouterr()
+    assert code == 0, err
+    data = json.loads(js.read_text())
+    assert set(data["filter"]) == {"gx_dps", "ax_mps2"}
+    page = (out / "report.md").read_text()
+    assert "## Filter models per axis" in page
+    for column, entry in data["filter"].items():
+        for name in ("loop_model.json", "allan_model.json"):
+            back = read_filter_file(out / "filter" / column / name)
+            assert back.system.rate == 100.0 and np.all(np.isfinite(back.P0))
+        scores = entry["scores"]
+        assert set(scores) == {"loop final model", "Allan model"}
+        consistent = {k: s["rms_m"] for k, s in scores.items() if s["sigma_over_rms"] >= 0.7}
+        if consistent:  # the stated rule, on the numbers the JSON gives
+            assert entry["recommended"] == min(consistent, key=consistent.get)
+        assert f"- {column}: {entry['why']}" in page
