@@ -34,6 +34,7 @@ from .flags import with_flags
 
 if TYPE_CHECKING:
     from ..loop.closeloop import LoopResult
+    from ..loop.handoff import Handoff
     from ..loop.sessions import SessionsResult
     from ..models.model import FOSModel
 
@@ -267,6 +268,7 @@ LOOP_FLAGS = {"horizons_s": "--horizons", "train": "--split", "evaluate": "--spl
 def close_loop(args: argparse.Namespace) -> int:
     from ..loop.closeloop import LoopConfig
     from ..loop.closeloop import close_loop as run_loop
+    from ..loop.handoff import hand_off
     from ..loop.loop_report import CONSOLE_WIDTH, console_summary, write_loop_report
     from ..loop.roles import channel_roles
 
@@ -304,20 +306,30 @@ def close_loop(args: argparse.Namespace) -> int:
         return _close_sessions(args, recs, channels, config, say, title, out, json_path,
                                model_path)
     result = run_loop(rec.column(args.column), channels[0], config, progress=say)
+    handoff = hand_off(result, rec.column(args.column), channels[0], sensor=config.sensor,
+                       units=config.units, column=args.column)
     meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
-            "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment"}
-    return _loop_outputs(args, result, lambda tmp: write_loop_report(result, tmp, title),
-                         console_summary(result), meta, out, json_path, model_path,
-                         ("residual loop report", "final model"))
+            "n_samples": rec.n_samples,
+            "fitted_on": "all the record; structure chosen on the close-loop segments"}
+
+    def write_report(tmp: Path) -> None:
+        write_loop_report(result, tmp, title)
+        handoff.write(tmp / "filter", {"source": rec.source, "column": args.column})
+        handoff.append_to(tmp / "report.md")
+
+    return _loop_outputs(args, result, write_report, console_summary(result), meta, out,
+                         json_path, model_path, ("residual loop report", "final model"),
+                         handoff)
 
 
 def _loop_outputs(args: argparse.Namespace, result: LoopResult | SessionsResult,
                   write_report: Callable[[Path], object], console: str, meta: dict,
                   out: Path, json_path: Path | None, model_path: Path | None,
-                  names: tuple[str, str]) -> int:
+                  names: tuple[str, str], handoff: Handoff | None = None) -> int:
     """Write a loop's report, model and JSON, and say where: one record's or the sessions'.
 
-    ``names`` are what the last line calls the report and the model.
+    ``names`` are what the last line calls the report and the model; with ``handoff`` the
+    model is its refit on all the data, and the JSON gains its ``"filter"`` entry.
     """
     from ..io.model_file import write_model
 
@@ -327,10 +339,13 @@ def _loop_outputs(args: argparse.Namespace, result: LoopResult | SessionsResult,
         bound, which = result.handed_on()
         meta = {**meta, "effects": [step.effect.describe() for step in result.steps],
                 "model": which}
-        write_model(model_path, bound.model, meta)
+        write_model(model_path, handoff.final if handoff else bound.model, meta)
     print(console)
     if json_path:
-        write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
+        found = result.to_json_dict()
+        if handoff is not None:
+            found["filter"] = handoff.to_dict()
+        write_text(json_path, json.dumps(found, indent=1) + "\n")
     print(f"{names[0]} written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else "")
           + (f"; {names[1]} written to {model_path}" if model_path else ""))

@@ -99,7 +99,7 @@ def imu(args: argparse.Namespace) -> int:
         write_text,
     )
     from ..workflows.imu import ImuConfig, record_axes, run_imu
-    from ..workflows.imu_report import console_summary, write_imu_report
+    from ..workflows.imu_report import axis_handoffs, console_summary, write_imu_report
     from .commands import _checked, _load
 
     json_path = writable_file(args.json) if args.json else None
@@ -130,13 +130,16 @@ def imu(args: argparse.Namespace) -> int:
                      aux=aux, config=config,
                      progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,
                                                  flush=True))
+    handoffs = axis_handoffs(result, {a.column: rec.column(a.column) for a in axes}, aux)
     with report_directory(out, [args.file]) as tmp:
-        write_imu_report(result, tmp, args.title or Path(args.file).name)
+        write_imu_report(result, tmp, args.title or Path(args.file).name, handoffs)
     print(console_summary(result))
     for line in [*result.noise.fit_warnings(), *result.noise.export_notes(config.inflate)]:
         print(f"warning: {line}", file=sys.stderr)
     if json_path:
-        write_text(json_path, json.dumps(result.to_dict(), indent=1) + "\n")
+        found = result.to_dict()
+        found["filter"] = {column: h.to_dict() for column, h in handoffs.items()}
+        write_text(json_path, json.dumps(found, indent=1) + "\n")
     print(f"six-axis report of {len(axes)} axes written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else ""))
     return 0

@@ -355,6 +355,17 @@ class FOSModel(BaseEstimator):
         plain.compensation = None
         return plain
 
+    def without_compensation(self) -> FOSModel:
+        """Return the model fitted to what the compensation leaves, without the compensation.
+
+        Its terms and weights are this model's: it models ``y - c`` with ``c`` the
+        compensation series (:func:`fosmodel.models.compensation.compensation_series` of
+        :attr:`compensation`, :attr:`rate`).  A model without a compensation is returned as
+        a copy.
+        """
+        self._check_fitted()
+        return self._plain()
+
     def _thin(self) -> str | None:
         """Return a note when the fitting window holds few samples per weight, else None."""
         weights = len(self.terms_) + 1

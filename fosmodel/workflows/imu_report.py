@@ -15,6 +15,9 @@ Layout of the report directory::
     models/AXIS.json     each axis's FOS error model (``fosmodel predict`` reads it)
     filter/allan_model.json   the axes' Allan error models as one state-space shaping filter
     filter/joint_model.json   the same with the axes' correlations in its driving noise
+    filter/AXIS/         each axis's loop final model (refitted on all the data) and Allan
+                         model as filter JSON (:mod:`fosmodel.filter.filter_file`), which
+                         the aided position filter recommends in the page
 """
 
 from __future__ import annotations
@@ -31,7 +34,9 @@ from ..core.parallel import in_workers
 from ..io.model_file import write_model
 from ..io.output import path_name, write_tables, write_text
 from ..loop.closeloop import LoopResult
+from ..loop.handoff import Handoff, hand_off
 from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
+from ..noise.allan_fit import NoiseFit
 from ..noise.axes import Axis
 from ..noise.imu_noise import ImuNoise, write_imu_noise
 from ..noise.metrics import metric_definitions, segment_text
@@ -41,7 +46,39 @@ from ..typeset.markdown import markdown_table
 from .imu import AxisResult, ImuResult, study_columns
 
 
-def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]:
+def axis_handoffs(result: ImuResult, columns: Mapping[str, np.ndarray],
+                  aux: Mapping[str, np.ndarray] | None = None) -> dict[str, Handoff]:
+    """Hand each axis's loop final model to a filter (:func:`fosmodel.loop.handoff.hand_off`).
+
+    Parameters
+    ----------
+    result : ImuResult
+    columns : mapping of str to ndarray
+        The record's axes by column (those :func:`~fosmodel.workflows.imu.run_imu` read).
+    aux : mapping of str to ndarray, optional
+        The auxiliary channels the loops read (a temperature).
+
+    Returns
+    -------
+    dict of str to Handoff
+        By axis column, each with the axis's Allan fit of the whole record.
+    """
+    channels = {**{a.axis.column: columns[a.axis.column] for a in result.axes}, **(aux or {})}
+    fits = {a.axis.column: a.fit for a in result.noise.axes}
+    calls = [(_handoff, (a, channels, fits.get(a.axis.column))) for a in result.axes]
+    found = in_workers(calls, result.config.n_jobs)
+    return {a.axis.column: h for a, h in zip(result.axes, found)}
+
+
+def _handoff(a: AxisResult, channels: Mapping[str, np.ndarray],
+             fit: NoiseFit | None) -> Handoff:
+    others = {k: v for k, v in channels.items() if k != a.axis.column}
+    return hand_off(a.loop, channels[a.axis.column], others, sensor=a.axis.sensor,
+                    units=a.axis.units, allan=fit, column=a.axis.column)
+
+
+def write_imu_report(result: ImuResult, out_dir: Path, title: str,
+                     handoffs: Mapping[str, Handoff] | None = None) -> list[Path]:
     """Write the whole report of :func:`fosmodel.workflows.imu.run_imu` into ``out_dir``.
 
     Parameters
@@ -51,6 +88,9 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
         An existing directory (the command publishes it atomically).
     title : str
         The report's title.
+    handoffs : mapping of str to Handoff, optional
+        Each axis's filter models (:func:`axis_handoffs`), written under ``filter/AXIS/``
+        with a section of the page.
 
     Returns
     -------
@@ -68,10 +108,43 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
         write_text(out_dir / "filter" / "joint_model.json",
                    json.dumps({"source": result.source, **result.joint.to_dict()}, indent=1)
                    + "\n")
+    axis_files = [p for column, h in (handoffs or {}).items()
+                  for p in h.write(out_dir / "filter" / path_name(column),
+                                   {"source": result.source, "column": column})]
     report = out_dir / "report.md"
-    write_text(report, _page(result, title, tables, models))
+    write_text(report, _page(result, title, tables, models)
+               + (_handoff_section(handoffs) if handoffs else ""))
     joint = [out_dir / "filter" / "joint_model.json"] if result.joint is not None else []
-    return [*paths, *(p for p, _ in models), filter_path, *joint, report]
+    return [*paths, *(p for p, _ in models), filter_path, *joint, *axis_files, report]
+
+
+def _handoff_section(handoffs: Mapping[str, Handoff]) -> str:
+    """Return the page's section on each axis's filter models and the one recommended."""
+    rows = []
+    for column, h in handoffs.items():
+        loop, allan = h.scores.get("loop final model"), h.scores.get("Allan model")
+        rows.append({"axis": column, "recommended": h.recommended or "none",
+                     "loop RMS [m]": loop.rms_m if loop else np.nan,
+                     "loop sigma / RMS": loop.ratio if loop else np.nan,
+                     "Allan RMS [m]": allan.rms_m if allan else np.nan,
+                     "Allan sigma / RMS": allan.ratio if allan else np.nan})
+    first = next(iter(handoffs.values()))
+    cycle = next((h.cycle_s for h in handoffs.values() if h.cycle_s), None)
+    lines = ["", "## Filter models per axis", "",
+             "Each axis's loop final model and Allan model as filter JSON in "
+             "`filter/AXIS/loop_model.json` and `filter/AXIS/allan_model.json` (see the docs' "
+             "Kalman page, \"The filter JSON\"). The final model's structure was chosen on "
+             "the loop's segments and its weights refitted on all the data "
+             f"({first.n_samples} samples); the Allan model is the fit of the whole record. "
+             "Each model was judged in the 1-D aided position filter (the tilt error model for "
+             "a gyro), fitted on the first half of the record and run on the second, with "
+             "position updates of 0.1 m"
+             + (f" in {cycle:g} s / {cycle:g} s update/prediction cycles" if cycle else "")
+             + "; the recommended one has the lowest RMS position error among those whose "
+             "filter claims at least 0.7 of its actual error (sigma / RMS).", "",
+             markdown_table(pd.DataFrame(rows), digits=4), ""]
+    lines += [f"- {column}: {h.why}" for column, h in handoffs.items()]
+    return "\n".join(lines) + "\n"
 
 
 def write_imu_tables(result: ImuResult, out_dir: Path,
