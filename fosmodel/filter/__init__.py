@@ -14,6 +14,14 @@ from typing import TYPE_CHECKING
 from .._lazy import attach
 
 if TYPE_CHECKING:
+    from .aided import (
+        AidedRun,
+        accelerometer_run,
+        aided_position_run,
+        compare_in_filter,
+        integrate,
+        position_fixes,
+    )
     from .allan_statespace import (
         TermValue,
         allan_state_space,
@@ -39,6 +47,7 @@ if TYPE_CHECKING:
         recursive_gain,
         steady_state_gain,
     )
+    from .fos_filter import BiasComponent, DriverTerm, FOSFilterModel, FOSFilterResults
     from .joint_noise import JointNoise
     from .kalman import FilterRun, KalmanFilter, run_filter
     from .statespace import (
@@ -60,6 +69,9 @@ else:
         "kalman": ("FilterRun", "KalmanFilter", "run_filter"),
         "statespace": ("NonlinearStateSpace", "StateSpace", "position_velocity_error_model",
                        "to_nonlinear_state_space", "to_state_space"),
+        "aided": ("AidedRun", "accelerometer_run", "aided_position_run", "compare_in_filter",
+                  "integrate", "position_fixes"),
+        "fos_filter": ("BiasComponent", "DriverTerm", "FOSFilterModel", "FOSFilterResults"),
     })
 
 __all__ = [
@@ -70,4 +82,7 @@ __all__ = [
     "initial_covariance", "kalman_angle_std", "model_adev", "model_terms",
     "position_velocity_error_model", "recursive_gain", "run_filter", "steady_state_gain",
     "to_nonlinear_state_space", "to_state_space",
+    "AidedRun", "BiasComponent", "DriverTerm", "FOSFilterModel", "FOSFilterResults",
+    "accelerometer_run", "aided_position_run", "compare_in_filter", "integrate",
+    "position_fixes",
 ]
