@@ -14,6 +14,14 @@ from typing import TYPE_CHECKING
 from .._lazy import attach
 
 if TYPE_CHECKING:
+    from .aided import (
+        AidedRun,
+        accelerometer_run,
+        aided_position_run,
+        compare_in_filter,
+        integrate,
+        position_fixes,
+    )
     from .allan_statespace import (
         TermValue,
         allan_state_space,
@@ -40,6 +48,7 @@ if TYPE_CHECKING:
         steady_state_gain,
     )
     from .filter_file import FilterFile, read_filter_file, write_filter_file
+    from .fos_filter import BiasComponent, DriverTerm, FOSFilterModel, FOSFilterResults
     from .joint_noise import JointNoise
     from .kalman import FilterRun, KalmanFilter, run_filter
     from .statespace import (
@@ -63,6 +72,9 @@ else:
         "kalman": ("FilterRun", "KalmanFilter", "run_filter"),
         "statespace": ("NonlinearStateSpace", "StateSpace", "position_velocity_error_model",
                        "tilt_error_model", "to_nonlinear_state_space", "to_state_space"),
+        "aided": ("AidedRun", "accelerometer_run", "aided_position_run", "compare_in_filter",
+                  "integrate", "position_fixes"),
+        "fos_filter": ("BiasComponent", "DriverTerm", "FOSFilterModel", "FOSFilterResults"),
     })
 
 __all__ = [
@@ -75,4 +87,7 @@ __all__ = [
     "position_velocity_error_model", "read_filter_file", "recursive_gain", "run_filter",
     "steady_state_gain", "tilt_error_model", "to_nonlinear_state_space", "to_state_space",
     "write_filter_file",
+    "AidedRun", "BiasComponent", "DriverTerm", "FOSFilterModel", "FOSFilterResults",
+    "accelerometer_run", "aided_position_run", "compare_in_filter", "integrate",
+    "position_fixes",
 ]
