@@ -208,7 +208,7 @@ def hand_off(
     scores: dict[str, FilterScore] = {}
     cycle: float | None = None
     if not known:
-        why = ("Not judged: the column's sensor and units are not known (give --units), so "
+        why = ("Not judged: the column's sensor and units are not known (give the units), so "
                "the filter's position error cannot be put in metres.")
     elif not linear:
         why = ("The loop's final model has nonlinear terms: its filter JSON is for an extended "
