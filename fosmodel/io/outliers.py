@@ -16,6 +16,9 @@ refusing them would refuse clean records (a 13-sigma sample or six in a million)
 spikes count towards the share: runs of at most ``SPIKE_RUN`` outlying samples.  A longer
 run is an event of the record (the sensor moved, a step, a shock), which the checks that
 need a static record and the residual loop's effects name for what it is; it is noted.
+A slow excursion beyond the bounds (a die temperature's warm-up, a drift), where the median
+of the samples about an outlier lies beyond them too, is the signal, not outliers: it is noted
+as such and left alone.
 """
 
 from __future__ import annotations
@@ -39,6 +42,9 @@ OUTLIER_K = 10.0
 OUTLIER_SHARE = 0.01
 #: The longest run of consecutive outlying samples that counts as a spike (a glitch).
 SPIKE_RUN = 3
+#: Samples about an outlier whose median tells a slow excursion (beyond the bounds too) from
+#: a glitch or a knock (back where the rest of the record is).
+SLOW_WINDOW = 101
 _MAD_TO_SIGMA = 1.4826
 
 
@@ -46,7 +52,8 @@ class Outliers(NamedTuple):
     """A column's outliers: where they are, the bounds they lie outside, their share.
 
     ``share`` is the share of the column's mean square about its median that its spikes
-    (runs of at most ``SPIKE_RUN`` samples) carry.
+    (runs of at most ``SPIKE_RUN`` samples) carry; ``samples`` leaves out ``slow``, the
+    samples of a slow excursion beyond the bounds (the signal itself).
     """
 
     samples: np.ndarray
@@ -54,24 +61,41 @@ class Outliers(NamedTuple):
     high: float
     share: float
     spikes: np.ndarray
+    slow: np.ndarray
 
 
-def _in_spikes(x: np.ndarray, index: np.ndarray, limit: float) -> np.ndarray:
-    """Mark the sorted outlying indices that are spikes: glitches, not the signal moving.
+def _window_medians(x: np.ndarray, index: np.ndarray, half: int) -> np.ndarray:
+    """Return the median of the ``2 half + 1`` samples about each of ``index``.
 
-    A spike lies in a run of at most ``SPIKE_RUN`` outlying samples in a row and stands out
-    from its neighbours too: farther than ``limit`` from the median of the
-    ``4 SPIKE_RUN + 1`` samples around it.  Where a slow excursion (a warm-up) crosses the
-    bounds, noise splits it into short runs, but each of their samples is near its neighbours.
+    The window is moved, not clipped, at the record's ends: a clipped one repeats the end
+    sample, so a glitch in the first samples would be its own neighbourhood.  Taken in chunks,
+    so that a column with many outliers does not build one large array.
     """
+    width = min(2 * half + 1, len(x))
+    first = np.clip(index - half, 0, len(x) - width)
+    out = np.empty(index.size)
+    for start in range(0, index.size, 8192):
+        around = first[start:start + 8192, None] + np.arange(width)
+        out[start:start + 8192] = np.median(x[around], axis=1)
+    return out
+
+
+def _slow_and_spikes(x: np.ndarray, index: np.ndarray,
+                     limit: float) -> tuple[np.ndarray, np.ndarray]:
+    """Mark the sorted outlying indices of a slow excursion, and those that are spikes.
+
+    A sample is part of a slow excursion (a warm-up, a drift: the signal itself, not a
+    fault) where the median of the ``SLOW_WINDOW`` samples about it lies beyond half the
+    bounds (half, so that the noise about the excursion where it crosses a bound is part of
+    it); a glitch or a knock leaves that median where the rest of the record is.  A spike
+    is an outlier in a run of at most ``SPIKE_RUN`` in a row that is not part of such an
+    excursion.
+    """
+    x = np.asarray(x, dtype=float)
+    slow = np.abs(_window_medians(x, index, SLOW_WINDOW // 2) - median(x)) > limit / 2
     starts = np.flatnonzero(np.diff(index, prepend=index[0] - 2) != 1)
     lengths = np.diff(starts, append=index.size)
-    short = np.repeat(lengths <= SPIKE_RUN, lengths)
-    half = 2 * SPIKE_RUN
-    around = np.clip(index[short, None] + np.arange(-half, half + 1), 0, len(x) - 1)
-    local = np.median(np.asarray(x)[around], axis=1)
-    short[short] = np.abs(np.asarray(x)[index[short]] - local) > limit
-    return short
+    return slow, np.repeat(lengths <= SPIKE_RUN, lengths) & ~slow
 
 
 def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
@@ -93,10 +117,11 @@ def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
             sigma = float(steps.min()) if steps.size else 0.0
         index = np.flatnonzero(deviation > OUTLIER_K * sigma)
         if sigma > 0 and index.size:
-            spikes = index[_in_spikes(x, index, OUTLIER_K * sigma)]
+            slow, spike = _slow_and_spikes(x, index, OUTLIER_K * sigma)
+            spikes = index[spike]
             share = float(deviation[spikes] @ deviation[spikes]) / float(deviation @ deviation)
-            found[name] = Outliers(index, center - OUTLIER_K * sigma, center + OUTLIER_K * sigma,
-                                   share, spikes)
+            found[name] = Outliers(index[~slow], center - OUTLIER_K * sigma,
+                                   center + OUTLIER_K * sigma, share, spikes, index[slow])
     return found
 
 
@@ -119,23 +144,21 @@ def handle_outliers(record: Record, found: dict[str, Outliers], mode: str,
         _refuse(record, found, rule, first_line)
     for name, out in found.items():
         bounds = f"[{out.low:.6g}, {out.high:.6g}]"
-        slow = out.samples.size - out.spikes.size
-        if mode in ("keep", "refuse") and slow:  # a warm-up or a drift: the signal itself
+        if out.slow.size:  # a warm-up or a drift: the signal itself
             record.notes.append(
-                f"column {name!r}: {slow} sample(s) outside {bounds} in runs of more than "
-                f"{SPIKE_RUN} samples, a slow excursion (a warm-up, a drift): not counted as "
-                "outliers, kept")
-            if not out.spikes.size:
+                f"column {name!r}: {out.slow.size} sample(s) outside {bounds} where the "
+                f"median of the {SLOW_WINDOW} samples about them is far out too, a slow excursion "
+                "(a warm-up, a drift): not counted as outliers, kept")
+            if not out.samples.size:
                 continue
         done = {"keep": "kept (outliers='clip' or 'drop' handles them)",
                 "refuse": (f"kept: they carry {_percent(out.share)} of its mean square about its "
                            f"median, under the {_percent(OUTLIER_SHARE)} at which the record is "
                            "refused (outliers='keep' or 'clip' or 'drop' says otherwise)"),
                 "clip": f"clipped to {bounds}", "drop": "dropped"}[mode]
-        counted = out.spikes if mode in ("keep", "refuse") else out.samples
         record.notes.append(
-            f"column {name!r}: {counted.size} outlier(s) ({rule}, outside {bounds}) at "
-            f"{positions(counted, first_line)}; {done}")
+            f"column {name!r}: {out.samples.size} outlier(s) ({rule}, outside {bounds}) at "
+            f"{positions(out.samples, first_line)}; {done}")
         if mode == "clip":
             record.data[name] = np.clip(record.data[name], out.low, out.high)
     if mode == "drop":
