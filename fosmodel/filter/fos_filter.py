@@ -279,10 +279,10 @@ class FOSFilterResults:
 
     def input_matrix(self, exog: Mapping[str, ArrayLike] | None, n: int) -> np.ndarray:
         """Build the inputs ``u`` for ``n`` samples from the driver channels of ``exog``."""
-        channels = as_channels(exog, [d.channel for d in self.drivers], n) if self.drivers \
-            else {}
-        return np.column_stack([d.values(channels[d.channel]) for d in self.drivers]) \
-            if self.drivers else np.zeros((n, 0))
+        if not self.drivers:
+            return np.zeros((n, 0))
+        channels = as_channels(exog, [d.channel for d in self.drivers], n)
+        return np.column_stack([d.values(channels[d.channel]) for d in self.drivers])
 
     def summary(self) -> str:
         """Return a plain-text table of the states and drivers."""
