@@ -56,8 +56,7 @@ from scipy.linalg import block_diag
 
 from data_synth import make_scenario
 from data_synth.thermal import thermal_sessions
-from fosmodel import FOSModel
-from fosmodel.core.exceptions import InputError
+from fosmodel import FOSModel, InputError
 from fosmodel.filter import (
     AidedRun,
     FOSFilterModel,
