@@ -16,8 +16,9 @@ Fitting, on a record at ``fs``:
 1. **Drivers** (``exog``, e.g. the die temperature): the record is cut into 80 blocks; FOS,
    with no intercept, selects among each channel and its square on the *differences* of the
    block means (a driver's effect follows the driver's changes; a wander common to both does
-   not survive the differencing as well), on the first two thirds of the differences.  A
-   driver is kept only if it lowers the mean square of the held-out last third; its weights
+   not survive the differencing as well), on two of every three differences.  A driver is
+   kept only if it lowers the mean square of the third held out (every third difference: a
+   held-out last stretch that falls on a hold of the temperature could not judge); its weights
    are then refitted on all differences and its part is subtracted before the noise fit.
 2. **Time scales**: on the series of block means (``block_s``, 1 s by default), the local
    levels of :mod:`fosmodel.core.levels` (exponentially weighted means of the past blocks) at
@@ -67,8 +68,8 @@ __all__ = ["BiasComponent", "DriverTerm", "FOSFilterModel", "FOSFilterResults"]
 
 #: Blocks the record is cut into for the driver search (differences of their means).
 DRIVER_BLOCKS = 80
-#: The share of the driver differences held out to confirm a driver.
-HELD_OUT = 1.0 / 3.0
+#: Every this many-th driver difference is held out to confirm a driver.
+HELD_OUT_EVERY = 3
 #: Fewest blocks a fit needs.
 MIN_BLOCKS = 50
 #: Time constants (in blocks) of the default candidate levels: 4, 8, ... blocks up to the
@@ -279,10 +280,10 @@ class FOSFilterResults:
 
     def input_matrix(self, exog: Mapping[str, ArrayLike] | None, n: int) -> np.ndarray:
         """Build the inputs ``u`` for ``n`` samples from the driver channels of ``exog``."""
-        channels = as_channels(exog, [d.channel for d in self.drivers], n) if self.drivers \
-            else {}
-        return np.column_stack([d.values(channels[d.channel]) for d in self.drivers]) \
-            if self.drivers else np.zeros((n, 0))
+        if not self.drivers:
+            return np.zeros((n, 0))
+        channels = as_channels(exog, [d.channel for d in self.drivers], n)
+        return np.column_stack([d.values(channels[d.channel]) for d in self.drivers])
 
     def summary(self) -> str:
         """Return a plain-text table of the states and drivers."""
@@ -345,13 +346,16 @@ def _select_drivers(y: np.ndarray, channels: Mapping[str, np.ndarray]) -> tuple[
     usable = X.std(axis=0) > 0
     if not usable.any():
         return ()
-    cut = int(round(len(dy) * (1.0 - HELD_OUT)))
-    res = fos(X[:cut, usable], dy[:cut], stop="bic", max_terms=2, fit_intercept=False)
+    # every third difference is held out: the increments of a wander are nearly independent,
+    # and a last third that falls on a hold of the temperature could not judge a driver
+    held_out = np.arange(len(dy)) % HELD_OUT_EVERY == HELD_OUT_EVERY - 1
+    fit_on = ~held_out
+    res = fos(X[fit_on][:, usable], dy[fit_on], stop="bic", max_terms=2, fit_intercept=False)
     if not res.n_terms:
         return ()
     cols = np.flatnonzero(usable)[res.support]
-    held = dy[cut:] - X[cut:, cols] @ res.coef
-    if np.mean(held**2) >= np.mean(dy[cut:] ** 2):
+    held = dy[held_out] - X[held_out][:, cols] @ res.coef
+    if np.mean(held**2) >= np.mean(dy[held_out] ** 2):
         return ()
     coef, *_ = np.linalg.lstsq(X[:, cols], dy, rcond=None)
     return tuple(DriverTerm(forms[c].channel, forms[c].power, forms[c].centre, forms[c].offset,

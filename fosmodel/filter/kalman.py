@@ -130,7 +130,8 @@ def run_filter(kf: KalmanFilter, z: ArrayLike, inputs: ArrayLike | None = None, 
         ``"numba"`` runs the compiled loop of :mod:`fosmodel.filter.kalman_numba` (a scalar
         measurement only; the ``fast`` extra); ``"auto"`` does so where it can (numba
         installed, ``FOSMODEL_NUMBA`` not ``0``, one measurement) and runs the NumPy loop
-        otherwise.  Both give the same estimates to rounding.
+        otherwise.  Both give the same estimates to rounding (the compiled loop leaves
+        ``kf.K`` as it was).
 
     Returns
     -------
