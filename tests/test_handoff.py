@@ -164,3 +164,25 @@ def test_imu_writes_each_axis_s_filter_models_and_a_section(tmp_path, capsys):
         if consistent:  # the stated rule, on the numbers the JSON gives
             assert entry["recommended"] == min(consistent, key=consistent.get)
         assert f"- {column}: {entry['why']}" in page
+
+
+@pytest.mark.slow
+def test_a_final_model_with_a_level_and_a_driver_converts_exactly():
+    """The loop's level (a state) and its temperature compensation (D) in the state space."""
+    from fosmodel.filter import initial_covariance, to_state_space
+
+    rec = make_scenario("slow_random_walk_temperature", seed=0)
+    y = rec.columns[rec.target]
+    channels = {k: v for k, v in rec.columns.items() if k != rec.target}
+    result = close_loop(y, channels, LoopConfig(rate=rec.rate, sensor="gyro", units="deg/s"))
+    bound = result.final_model
+    assert bound.model.compensation and bound.model.spec_.levels
+    ss = to_state_space(bound.model)
+    assert ss.state_names[-1].startswith("level@") and np.any(ss.D)
+    u = ss.input_matrix(channels, len(y))  # the raw temperature only
+    pred = bound.predict(y)
+    for n in (2000, 30_000, 89_000):
+        x = ss.state_from(y[:n], u[:n])
+        assert ss.predict_measurement(ss.step(x, u[n]), u[n]) == pytest.approx(pred[n],
+                                                                               abs=1e-12)
+    assert np.all(np.linalg.eigvalsh(initial_covariance(ss, len(y) // 2)) > 0)
