@@ -186,3 +186,41 @@ def test_a_final_model_with_a_level_and_a_driver_converts_exactly():
         assert ss.predict_measurement(ss.step(x, u[n]), u[n]) == pytest.approx(pred[n],
                                                                                abs=1e-12)
     assert np.all(np.linalg.eigvalsh(initial_covariance(ss, len(y) // 2)) > 0)
+
+
+def test_the_judging_filter_s_settled_gains_reproduce_run_filter():
+    """The periodic fast path against run_filter itself, with inputs and unit roots."""
+    from fosmodel import FOSModel
+    from fosmodel.filter import (
+        KalmanFilter,
+        initial_covariance,
+        position_velocity_error_model,
+        run_filter,
+        to_state_space,
+    )
+    from fosmodel.loop.handoff import _periodic_filter
+
+    y, _ = _driven_accel(4)
+    model = FOSModel(max_lag=3, levels=[30.0], rate=RATE).fit(y[:10_000])
+    error = to_state_space(model.refit_weights(y[:10_000], hold=True))
+    system = position_velocity_error_model(error, 1 / RATE)
+    p0 = np.zeros((system.n_states,) * 2)
+    p0[2:, 2:] = initial_covariance(error, 10_000)
+    rng = np.random.default_rng(0)
+    m, period = 20_000, 600
+    z = np.cumsum(np.cumsum(rng.standard_normal(m))) * 1e-4 + 0.1 * rng.standard_normal(m)
+    z[np.arange(m) % period >= period // 2] = np.nan
+    inputs = np.ones((m, 1))
+
+    def fresh():
+        return KalmanFilter.from_state_space(system, [[0.01]], np.zeros(system.n_states), p0)
+
+    reference = run_filter(fresh(), z, inputs)
+    position, variance = _periodic_filter(fresh(), z, inputs, period)
+    np.testing.assert_allclose(position, reference.x[:, 0], rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(variance, reference.variance[:, 0], rtol=1e-8)
+    # a pattern that does not repeat is run_filter all along
+    z[12_345] = np.nan
+    position, _ = _periodic_filter(fresh(), z, inputs, period)
+    np.testing.assert_allclose(position, run_filter(fresh(), z, inputs).x[:, 0], rtol=1e-12,
+                               atol=1e-12)
