@@ -83,8 +83,8 @@ def test_without_units_nothing_is_judged_and_the_report_says_why(driven):
     y, channels, result = driven
     handoff = hand_off(result, y, channels, sensor=None, units=None)
     assert handoff.scores == {} and handoff.recommended is None and handoff.allan is None
-    assert handoff.why == ("Not judged: the column's sensor and units are not known (give "
-                           "--units), so the filter's position error cannot be put in metres.")
+    assert handoff.why == ("Not judged: the column's sensor and units are not known, so the "
+                           "filter's position error cannot be put in metres.")
 
 
 def test_a_nonlinear_final_model_is_written_for_an_ekf_and_not_judged(tmp_path):

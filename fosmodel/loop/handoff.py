@@ -208,8 +208,8 @@ def hand_off(
     scores: dict[str, FilterScore] = {}
     cycle: float | None = None
     if not known:
-        why = ("Not judged: the column's sensor and units are not known (give --units), so "
-               "the filter's position error cannot be put in metres.")
+        why = ("Not judged: the column's sensor and units are not known, so the filter's "
+               "position error cannot be put in metres.")
     elif not linear:
         why = ("The loop's final model has nonlinear terms: its filter JSON is for an extended "
                "Kalman filter (kind \"nonlinear\") and was not judged; the Allan model is the "
