@@ -125,7 +125,8 @@ def test_close_loop_writes_the_filter_files_and_the_model_refitted_on_all(tmp_pa
         assert read_filter_file(out / "filter" / name).system.rate == RATE
     report = (out / "report.md").read_text()
     assert "## The filter" in report and "Recommended: loop final model." in report
-    assert "its weights were refitted on all the data given (30000 samples)" in report
+    assert ("its terms' weights were refitted on all the data given (30000 samples), its "
+            "compensation's weights kept from the loop's fitting segment") in report
     saved = json.loads(model.read_text())
     assert saved["meta"]["fitted_on"] == ("all the record; structure chosen on the close-loop "
                                           "segments")

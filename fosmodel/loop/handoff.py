@@ -151,8 +151,11 @@ class Handoff:
         lines = [f"The filter JSON of the loop's final model is `{where}{FILES[LOOP]}`"
                  + (f", the Allan model's `{where}{FILES[ALLAN]}`" if self.allan else "")
                  + ". The final model's structure (terms, levels, drivers) was chosen on the "
-                 "loop's segments; its weights were refitted on all the data given "
-                 f"({self.n_samples} samples), and so was the Allan model."]
+                 "loop's segments; its terms' weights were refitted on all the data given "
+                 f"({self.n_samples} samples)"
+                 + (", its compensation's weights kept from the loop's fitting segment"
+                    if self.final.compensation else "")
+                 + ", and so was the Allan model."]
         if self.scores:
             lines.append(f"Judged in the 1-D aided position filter, each fitted on the first "
                          f"half and run on the second, position updates of {SIGMA_M:g} m in "
