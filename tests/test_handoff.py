@@ -83,8 +83,8 @@ def test_without_units_nothing_is_judged_and_the_report_says_why(driven):
     y, channels, result = driven
     handoff = hand_off(result, y, channels, sensor=None, units=None)
     assert handoff.scores == {} and handoff.recommended is None and handoff.allan is None
-    assert handoff.why == ("Not judged: the column's sensor and units are not known (give "
-                           "--units), so the filter's position error cannot be put in metres.")
+    assert handoff.why == ("Not judged: the column's sensor and units are not known, so the "
+                           "filter's position error cannot be put in metres.")
 
 
 def test_a_nonlinear_final_model_is_written_for_an_ekf_and_not_judged(tmp_path):
@@ -125,7 +125,8 @@ def test_close_loop_writes_the_filter_files_and_the_model_refitted_on_all(tmp_pa
         assert read_filter_file(out / "filter" / name).system.rate == RATE
     report = (out / "report.md").read_text()
     assert "## The filter" in report and "Recommended: loop final model." in report
-    assert "its weights were refitted on all the data given (30000 samples)" in report
+    assert ("its terms' weights were refitted on all the data given (30000 samples), its "
+            "compensation's weights kept from the loop's fitting segment") in report
     saved = json.loads(model.read_text())
     assert saved["meta"]["fitted_on"] == ("all the record; structure chosen on the close-loop "
                                           "segments")
@@ -164,3 +165,63 @@ def test_imu_writes_each_axis_s_filter_models_and_a_section(tmp_path, capsys):
         if consistent:  # the stated rule, on the numbers the JSON gives
             assert entry["recommended"] == min(consistent, key=consistent.get)
         assert f"- {column}: {entry['why']}" in page
+
+
+@pytest.mark.slow
+def test_a_final_model_with_a_level_and_a_driver_converts_exactly():
+    """The loop's level (a state) and its temperature compensation (D) in the state space."""
+    from fosmodel.filter import initial_covariance, to_state_space
+
+    rec = make_scenario("slow_random_walk_temperature", seed=0)
+    y = rec.columns[rec.target]
+    channels = {k: v for k, v in rec.columns.items() if k != rec.target}
+    result = close_loop(y, channels, LoopConfig(rate=rec.rate, sensor="gyro", units="deg/s"))
+    bound = result.final_model
+    assert bound.model.compensation and bound.model.spec_.levels
+    ss = to_state_space(bound.model)
+    assert ss.state_names[-1].startswith("level@") and np.any(ss.D)
+    u = ss.input_matrix(channels, len(y))  # the raw temperature only
+    pred = bound.predict(y)
+    for n in (2000, 30_000, 89_000):
+        x = ss.state_from(y[:n], u[:n])
+        assert ss.predict_measurement(ss.step(x, u[n]), u[n]) == pytest.approx(pred[n],
+                                                                               abs=1e-12)
+    assert np.all(np.linalg.eigvalsh(initial_covariance(ss, len(y) // 2)) > 0)
+
+
+def test_the_judging_filter_s_settled_gains_reproduce_run_filter():
+    """The periodic fast path against run_filter itself, with inputs and unit roots."""
+    from fosmodel import FOSModel
+    from fosmodel.filter import (
+        KalmanFilter,
+        initial_covariance,
+        position_velocity_error_model,
+        run_filter,
+        to_state_space,
+    )
+    from fosmodel.loop.handoff import _periodic_filter
+
+    y, _ = _driven_accel(4)
+    model = FOSModel(max_lag=3, levels=[30.0], rate=RATE).fit(y[:10_000])
+    error = to_state_space(model.refit_weights(y[:10_000], hold=True))
+    system = position_velocity_error_model(error, 1 / RATE)
+    p0 = np.zeros((system.n_states,) * 2)
+    p0[2:, 2:] = initial_covariance(error, 10_000)
+    rng = np.random.default_rng(0)
+    m, period = 20_000, 600
+    z = np.cumsum(np.cumsum(rng.standard_normal(m))) * 1e-4 + 0.1 * rng.standard_normal(m)
+    z[np.arange(m) % period >= period // 2] = np.nan
+    inputs = np.ones((m, 1))
+
+    def fresh():
+        return KalmanFilter.from_state_space(system, [[0.01]], np.zeros(system.n_states), p0)
+
+    reference = run_filter(fresh(), z, inputs)
+    position, variance = _periodic_filter(fresh(), z, inputs, period)
+    np.testing.assert_allclose(position, reference.x[:, 0], rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(variance, reference.variance[:, 0], rtol=1e-8)
+    # a pattern that does not repeat is run_filter all along
+    z[12_345] = np.nan
+    position, _ = _periodic_filter(fresh(), z, inputs, period)
+    np.testing.assert_allclose(position, run_filter(fresh(), z, inputs).x[:, 0], rtol=1e-12,
+                               atol=1e-12)
