@@ -19,7 +19,7 @@ SIX = "gx=deg/s,gy=deg/s,gz=deg/s,ax=m/s^2,ay=m/s^2,az=m/s^2"
 def _two_rows(tmp_path):
     path = tmp_path / "two.csv"
     path.write_text("time,gx,gy,gz,ax,ay,az\n0,0.1,0.2,0.1,0.01,0.02,9.8\n"
-                    "0.01,0.2,0.1,0.3,0.01,0.03,9.81\n")
+                    "0.01,0.2,0.1,0.3,0.02,0.03,9.81\n")
     return path
 
 
