@@ -101,3 +101,15 @@ def test_a_panel_frames_values_whatever_their_last_digits(low, high):
     bottom, top = ax.get_ylim()
     assert bottom <= low and top >= high
     assert len(ax.yaxis.get_major_locator().tick_values(bottom, top)) >= 2
+
+
+def test_the_notes_after_the_stillness_check_name_command_line_flags(tmp_path, capsys):
+    counts = np.random.default_rng(5).integers(-40, 40, 6000)  # raw counts, not yet scaled
+    path = tmp_path / "rec.csv"
+    path.write_text("time,gx\n" + "".join(f"{k / 100:.2f},{c}\n" for k, c in enumerate(counts)))
+    assert cli.main(["allan", str(path), "--column", "gx", "--units", "deg/s", "--out",
+                     str(tmp_path / "report")]) == 0
+    err = capsys.readouterr().err
+    assert "fosmodel: note: column(s) gx hold only integers: if they are raw counts, scale " \
+           "them, e.g. --scale gx=1/16384" in err
+    assert "scale={" not in err

@@ -80,7 +80,8 @@ def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
     if stretch:
         print(f"fosmodel: note: {stretch}", file=sys.stderr)
     for note in rec.notes:
-        print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{note}", file=sys.stderr)
+        print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{with_flags(note)}",
+              file=sys.stderr)
     return kept
 
 
