@@ -306,7 +306,7 @@ def close_loop(args: argparse.Namespace) -> int:
                                   aux=args.aux or (),
                                   sensors={c: s for c in names if (s := _sensor_of(r, c))})
         except (InputError, OptionError):  # said by the checks below
-            return [args.column, *names]
+            return [args.column]
         drivers[:] = [*roles.slow, *roles.opted_in]
         return [args.column, *drivers]
 

@@ -112,8 +112,8 @@ def imu(args: argparse.Namespace) -> int:
     def analysed(r: Record) -> list[str]:  # the axes and the temperature
         try:
             axes, aux = record_axes(r, args.columns, args.units, args.temperature)
-        except InputError:  # said below
-            return [*r.names, *r.held]
+        except InputError:  # said below, by record_axes itself
+            return []
         return [*(a.column for a in axes), *aux]
 
     rec = _load(args, notes=False, analysed=analysed)  # every column: its temperature too
