@@ -113,3 +113,19 @@ def test_the_notes_after_the_stillness_check_name_command_line_flags(tmp_path, c
     assert "fosmodel: note: column(s) gx hold only integers: if they are raw counts, scale " \
            "them, e.g. --scale gx=1/16384" in err
     assert "scale={" not in err
+
+
+@pytest.mark.slow
+def test_close_loop_on_two_million_samples_draws_its_figures(tmp_path, capsys):
+    # the figure's frame, where no tick of the locator reached the data's maximum
+    n = 2_000_000
+    rng = np.random.default_rng(0)
+    gx = 0.05 * lfilter([1.0], [1.0, -0.5], rng.standard_normal(n))
+    path = tmp_path / "rec.npy"
+    np.save(path, np.rec.fromarrays([np.arange(n) / 100.0, np.round(gx, 6),
+                                     np.round(0.05 * rng.standard_normal(n), 6)],
+                                    names="time,gx,gy"))
+    out = tmp_path / "report"
+    assert cli.main(["close-loop", str(path), "--column", "gx", "--out", str(out)]) == 0, \
+        capsys.readouterr().err
+    assert (out / "report.md").is_file()
