@@ -78,6 +78,20 @@ def test_a_stale_temporary_of_the_writers_own_name_goes(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.txt"]
 
 
+def test_the_kept_copy_of_a_writer_killed_before_its_rename_goes(tmp_path):
+    out = tmp_path / "out.txt"
+    out.write_text("old")
+    kept = tmp_path / files._temporary_name(out, DEAD, "00000000abcd", ".kept")
+    os.link(out, kept)  # the copy of the destination, which was never replaced
+    other = tmp_path / files._temporary_name(out, DEAD, "00000000abce", ".kept")
+    (tmp_path / "elsewhere").write_text("mine")
+    os.link(tmp_path / "elsewhere", other)  # a link to another file: not provably ours
+    output.write_text(out, "new")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["elsewhere", other.name,
+                                                                 "out.txt"])
+    assert out.read_text() == "new" and (tmp_path / "elsewhere").read_text() == "mine"
+
+
 #: What a file beside the output is: a user's file of any name, one of the old unsigned
 #: pattern, a forged signature, a dead writer's temporary (as a file, a hard link of another
 #: file, a symbolic link, a directory), a live writer's.

@@ -15,7 +15,7 @@ import importlib
 import json
 import sys
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -40,17 +40,28 @@ if TYPE_CHECKING:
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
-          columns: list[str] | None = None, notes: bool = True) -> Record:
+          columns: list[str] | None = None, notes: bool = True,
+          analysed: Sequence[str] | Callable[[Record], Sequence[str]] | None = None,
+          feeds: str = "", drivers: Sequence[str] = ()) -> Record:
     """Load the record of ``path`` (default ``args.file``) with the loader options.
 
-    Only ``columns`` (default: all) are read and checked.  Its notes go to
-    stderr, after the file's name when ``path`` is given, unless not ``notes``
-    (:func:`_checked` says them after its checks).
+    Only ``columns`` (default: all) are read and checked.  Its ``analysed`` columns (the
+    modelled ones and the model's drivers; or a function of the record that names them;
+    default ``columns``) are refused on their content, the others the loader held left out
+    with a note (:func:`fosmodel.io.content.settle`; ``feeds`` says what they would have
+    fed).  Its notes go to stderr, after the file's name when ``path`` is given, unless not
+    ``notes`` (:func:`_checked` says them after its checks).
     """
+    from ..io.content import settle
+
     rec = load_record(path or args.file, columns=columns, rate=args.rate,
                       scale=parse_scales(args.scale or []), uniform=args.uniform,
                       outliers=args.outliers, gaps=args.gaps, topic=args.topic,
-                      temperature_topic=args.temperature_topic)
+                      temperature_topic=args.temperature_topic, hold=True)
+    analysed = analysed if analysed is not None else columns
+    rec = settle(rec, (analysed(rec) if callable(analysed) else analysed
+                       if analysed is not None else [*rec.names, *rec.held]), feeds,
+                 drivers)
     if notes:
         for note in rec.notes:
             print(f"fosmodel: note: {path + ': ' if path else ''}{with_flags(note)}",
@@ -70,7 +81,8 @@ def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
     if stretch:
         print(f"fosmodel: note: {stretch}", file=sys.stderr)
     for note in rec.notes:
-        print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{note}", file=sys.stderr)
+        print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{with_flags(note)}",
+              file=sys.stderr)
     return kept
 
 
@@ -279,7 +291,30 @@ def close_loop(args: argparse.Namespace) -> int:
                      {f"the record {i + 1}": f for i, f in enumerate(args.files)})
     several = len(args.files) > 1
     args.file = args.files[0]  # a single record's notes are not prefixed with its name
-    recs = [_load(args, path if several else None) for path in args.files]
+
+    drivers: list[str] = []  # of the record being loaded
+
+    def analysed(r: Record) -> list[str]:
+        """Name the modelled column, the drivers of its slow forms and the inputs asked for.
+
+        A column of no numbers (booleans, text) is no driver, and an inertial axis (a
+        companion; a gyro's accelerometers, offered in their fast part only) is not
+        analysed: a refusal of one becomes a note, and it is left out.
+        """
+        names = [n for n in r.names if n != args.column]
+        try:
+            axis = _axes(args, [args.column], r, optional=True)
+            roles = channel_roles(names, axis[0].sensor if axis else _sensor_of(r, args.column),
+                                  aux=args.aux or (),
+                                  sensors={c: s for c in names if (s := _sensor_of(r, c))})
+        except (InputError, OptionError):  # said by the checks below
+            return [args.column]
+        drivers[:] = [*roles.slow, *roles.opted_in]
+        return [args.column, *drivers]
+
+    recs = [_load(args, path if several else None, analysed=analysed,
+                  feeds="the loop's cross-axis table and fast inputs",
+                  drivers=drivers) for path in args.files]
     rec = recs[0]
     axis = _axes(args, [args.column], rec, optional=True)
     channels = [{name: r.column(name) for name in r.names if name != args.column}

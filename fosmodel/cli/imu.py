@@ -91,6 +91,7 @@ def workflow_settings(args: argparse.Namespace) -> dict[str, Any]:
 
 def imu(args: argparse.Namespace) -> int:
     """Run the six-axis workflow on ``args.file`` and publish its report in ``args.out``."""
+    from ..core.exceptions import InputError
     from ..io.output import (
         refuse_overwrite,
         report_directory,
@@ -98,6 +99,7 @@ def imu(args: argparse.Namespace) -> int:
         writable_file,
         write_text,
     )
+    from ..io.record import Record
     from ..workflows.imu import ImuConfig, record_axes, run_imu
     from ..workflows.imu_report import axis_handoffs, console_summary, write_imu_report
     from .commands import _checked, _load
@@ -107,7 +109,14 @@ def imu(args: argparse.Namespace) -> int:
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     from ..noise.checks import unused_columns
 
-    rec = _load(args, notes=False)  # every column: an IMU record has few; its temperature too
+    def analysed(r: Record) -> list[str]:  # the axes and the temperature
+        try:
+            axes, aux = record_axes(r, args.columns, args.units, args.temperature)
+        except InputError:  # said below, by record_axes itself
+            return []
+        return [*(a.column for a in axes), *aux]
+
+    rec = _load(args, notes=False, analysed=analysed)  # every column: its temperature too
     axes, aux = record_axes(rec, args.columns, args.units, args.temperature)
     rec = _checked(args, rec, axes)
     aux = {name: rec.column(name) for name in aux}  # the static stretch's, if one was kept

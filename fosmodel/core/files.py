@@ -100,12 +100,16 @@ def stale_temporaries(path: Path, suffix: str) -> Iterator[Path]:
         for item in path.parent.iterdir():
             m = pattern.match(item.name)
             if (m and m.group(3) == _signature(path.name, int(m.group(1)), m.group(2), suffix)
-                    and not _alive(int(m.group(1))) and _ours(item)):
+                    and not _alive(int(m.group(1))) and _ours(item, path)):
                 yield item
 
 
-def _ours(item: Path) -> bool:
-    """Whether ``item`` is as this process's writers leave it, and no file a command was given."""
+def _ours(item: Path, path: Path) -> bool:
+    """Whether ``item`` is as this process's writers leave it, and no file a command was given.
+
+    A regular file has no other link, but for ``path`` itself: the copy of a destination kept
+    by a writer killed before it replaced it is a second link to it.
+    """
     try:
         info = item.lstat()
     except OSError:
@@ -113,6 +117,10 @@ def _ours(item: Path) -> bool:
     if info.st_uid != os.getuid() or _given(item, info):
         return False
     if stat.S_ISREG(info.st_mode):
+        if info.st_nlink == 2:
+            with contextlib.suppress(OSError):
+                target = path.lstat()
+                return (target.st_dev, target.st_ino) == (info.st_dev, info.st_ino)
         return info.st_nlink == 1
     if not stat.S_ISDIR(info.st_mode):
         return False

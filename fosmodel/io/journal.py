@@ -16,6 +16,8 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
+import signal
+import threading
 from collections.abc import Iterator
 from contextvars import ContextVar
 from pathlib import Path
@@ -39,7 +41,8 @@ def all_or_nothing() -> Iterator[None]:
         with files.given_files():  # the command's inputs: no cleanup of temporaries removes them
             yield
     except BaseException:
-        _undo(published)
+        with _uninterrupted():  # a second Ctrl-C must not leave the undo half done
+            _undo(published)
         raise
     else:
         for _, kept in published:
@@ -83,6 +86,19 @@ def created(path: Path) -> None:
     published = _PUBLISHED.get()
     if published is not None:
         published.append((path, None))
+
+
+@contextlib.contextmanager
+def _uninterrupted() -> Iterator[None]:
+    """Ignore Ctrl-C inside the block (in the main thread, where signals are handled)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, handler)
 
 
 def _undo(published: list[tuple[Path, Path | None]]) -> None:

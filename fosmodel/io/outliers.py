@@ -126,21 +126,30 @@ def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
 
 
 def handle_outliers(record: Record, found: dict[str, Outliers], mode: str,
-                     first_line: int) -> None:
+                     first_line: int, hold: bool = False) -> None:
     """Note each column's outliers in the record; refuse, keep, clip or drop them (``mode``).
+
+    With ``hold``, a column that "refuse" would refuse the record for is put in
+    ``record.held`` with its refusal instead (refused if it is analysed, else left out).
 
     Raises
     ------
     InputError
         ``mode`` "refuse" and a column whose outliers carry more than ``OUTLIER_SHARE`` of its
-        mean square about its median; "drop" from a record without a time column.
+        mean square about its median (not with ``hold``); "drop" from a record without a
+        time column.
     """
     rule = f"|x - median| > {OUTLIER_K:g} x 1.4826 MAD"
     if not found:
         if mode not in ("keep", "refuse"):
             record.notes.append(f"outliers={mode!r}: no outliers found ({rule})")
         return
-    if mode == "refuse":
+    if mode == "refuse" and hold:
+        for name, out in list(found.items()):
+            if out.share > OUTLIER_SHARE:
+                record.held[name] = _refusal(record, name, out, rule, first_line)
+                del found[name]
+    elif mode == "refuse":
         _refuse(record, found, rule, first_line)
     for name, out in found.items():
         bounds = f"[{out.low:.6g}, {out.high:.6g}]"
@@ -170,7 +179,12 @@ def _refuse(record: Record, found: dict[str, Outliers], rule: str, first_line: i
     name, out = max(found.items(), key=lambda item: item[1].share)
     if out.share <= OUTLIER_SHARE:
         return
-    raise InputError(
+    raise InputError(_refusal(record, name, out, rule, first_line))
+
+
+def _refusal(record: Record, name: str, out: Outliers, rule: str, first_line: int) -> str:
+    """Return the refusal of a record for the outliers ``out`` of its column ``name``."""
+    return (
         f"{record.source}: column {name!r}: {out.spikes.size} outlier(s) ({rule}) at "
         f"{positions(out.spikes, first_line)} carry {_percent(out.share)} of its mean square "
         f"about its median: the fit's error, the variance and the Allan deviation would move "
