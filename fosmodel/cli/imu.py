@@ -102,7 +102,7 @@ def imu(args: argparse.Namespace) -> int:
     from ..workflows.imu_report import console_summary, write_imu_report
     from .commands import _checked, _load
 
-    json_path = writable_file(args.json) if args.json else None
+    json_path = writable_file(args.json, created=args.out) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     from ..noise.checks import unused_columns
