@@ -667,3 +667,13 @@ def test_a_warm_up_is_a_slow_excursion_not_outliers(tmp_path):
         f"column 'temp_c': {slow} sample(s) outside [{_bounds(temp)[0]:.6g}, "
         f"{_bounds(temp)[1]:.6g}] in runs of more than 3 samples, a slow excursion (a warm-up, "
         "a drift): not counted as outliers, kept"]
+
+
+def test_a_column_named_without_its_unit_suffix_is_suggested(tmp_path):
+    rec = load_record(_write(tmp_path, {"gx_rads": np.zeros(10), "gz_rads": np.ones(10)}),
+                      rate=10)
+    with pytest.raises(InputError, match=r"no column 'gz' \(did you mean 'gz_rads'\?\)"):
+        rec.column("gz")
+    with pytest.raises(InputError, match=r"no column 'gz' \(did you mean 'gz_rads'\?\)"):
+        load_record(_write(tmp_path, {"gx_rads": np.zeros(10), "gz_rads": np.ones(10)}),
+                    rate=10, columns=["gz"])
