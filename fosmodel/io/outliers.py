@@ -39,6 +39,9 @@ OUTLIER_K = 10.0
 OUTLIER_SHARE = 0.01
 #: The longest run of consecutive outlying samples that counts as a spike (a glitch).
 SPIKE_RUN = 3
+#: A run of more outlying samples in a row than this is a slow excursion of the signal itself
+#: (a temperature's warm-up, a drift), noted apart and not counted as outliers.
+SLOW_RUN = 100
 _MAD_TO_SIGMA = 1.4826
 
 
@@ -56,22 +59,11 @@ class Outliers(NamedTuple):
     spikes: np.ndarray
 
 
-def _in_spikes(x: np.ndarray, index: np.ndarray, limit: float) -> np.ndarray:
-    """Mark the sorted outlying indices that are spikes: glitches, not the signal moving.
-
-    A spike lies in a run of at most ``SPIKE_RUN`` outlying samples in a row and stands out
-    from its neighbours too: farther than ``limit`` from the median of the
-    ``4 SPIKE_RUN + 1`` samples around it.  Where a slow excursion (a warm-up) crosses the
-    bounds, noise splits it into short runs, but each of their samples is near its neighbours.
-    """
+def _in_spikes(index: np.ndarray, run: int = SPIKE_RUN) -> np.ndarray:
+    """Mark the sorted sample indices that lie in runs of at most ``run`` in a row."""
     starts = np.flatnonzero(np.diff(index, prepend=index[0] - 2) != 1)
     lengths = np.diff(starts, append=index.size)
-    short = np.repeat(lengths <= SPIKE_RUN, lengths)
-    half = 2 * SPIKE_RUN
-    around = np.clip(index[short, None] + np.arange(-half, half + 1), 0, len(x) - 1)
-    local = np.median(np.asarray(x)[around], axis=1)
-    short[short] = np.abs(np.asarray(x)[index[short]] - local) > limit
-    return short
+    return np.repeat(lengths <= run, lengths)
 
 
 def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
@@ -93,7 +85,7 @@ def find_outliers(data: dict[str, np.ndarray]) -> dict[str, Outliers]:
             sigma = float(steps.min()) if steps.size else 0.0
         index = np.flatnonzero(deviation > OUTLIER_K * sigma)
         if sigma > 0 and index.size:
-            spikes = index[_in_spikes(x, index, OUTLIER_K * sigma)]
+            spikes = index[_in_spikes(index)]
             share = float(deviation[spikes] @ deviation[spikes]) / float(deviation @ deviation)
             found[name] = Outliers(index, center - OUTLIER_K * sigma, center + OUTLIER_K * sigma,
                                    share, spikes)
@@ -119,20 +111,21 @@ def handle_outliers(record: Record, found: dict[str, Outliers], mode: str,
         _refuse(record, found, rule, first_line)
     for name, out in found.items():
         bounds = f"[{out.low:.6g}, {out.high:.6g}]"
-        slow = out.samples.size - out.spikes.size
-        if mode in ("keep", "refuse") and slow:  # a warm-up or a drift: the signal itself
+        short = _in_spikes(out.samples, SLOW_RUN)
+        counted = out.samples[short] if mode in ("keep", "refuse") else out.samples
+        slow = out.samples.size - counted.size
+        if slow:  # a warm-up or a drift: the signal itself
             record.notes.append(
                 f"column {name!r}: {slow} sample(s) outside {bounds} in runs of more than "
-                f"{SPIKE_RUN} samples, a slow excursion (a warm-up, a drift): not counted as "
+                f"{SLOW_RUN} samples, a slow excursion (a warm-up, a drift): not counted as "
                 "outliers, kept")
-            if not out.spikes.size:
+            if not counted.size:
                 continue
         done = {"keep": "kept (outliers='clip' or 'drop' handles them)",
                 "refuse": (f"kept: they carry {_percent(out.share)} of its mean square about its "
                            f"median, under the {_percent(OUTLIER_SHARE)} at which the record is "
                            "refused (outliers='keep' or 'clip' or 'drop' says otherwise)"),
                 "clip": f"clipped to {bounds}", "drop": "dropped"}[mode]
-        counted = out.spikes if mode in ("keep", "refuse") else out.samples
         record.notes.append(
             f"column {name!r}: {counted.size} outlier(s) ({rule}, outside {bounds}) at "
             f"{positions(counted, first_line)}; {done}")

@@ -196,8 +196,10 @@ def _oadev(y: np.ndarray, rate: float,
         Averaging times (s), deviations and the number of second differences of each.
     """
     if len(y) <= BLOCKED_SAMPLES:
+        # a tenth of a sample above each m: allantools truncates tau*rate (2019.9) or rounds
+        # it (2024), and either way gets m back, not m - 1 where m/rate*rate falls just short
         taus_s, adev, _, counts = allantools.oadev(y, rate=rate, data_type="freq",
-                                                   taus=ms / rate)
+                                                   taus=(ms + 0.1) / rate)
         return taus_s, adev, counts
     phase = allantools.frequency2phase(y, rate)  # allantools' phase, as oadev makes it
     ms = np.unique(ms)
