@@ -703,7 +703,7 @@ def test_close_loop_reads_the_units_in_a_column_s_name(tmp_path, capsys):
     lines = out.splitlines()
     assert lines[0] == ("prediction segment: MSE (deg/s)^2, outage position error (m), "
                         "free-run bias RMS (deg/s)")
-    assert lines[2].split()[-2] != "-"  # the outage error of the starting model, in metres
+    assert lines[3].split()[-2] != "-"  # the outage error of the starting model, in metres
 
 
 @pytest.mark.slow

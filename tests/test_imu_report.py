@@ -91,3 +91,22 @@ def test_a_fit_that_misses_is_warned_on_the_page_and_in_the_summary():
     assert re.search(r"\(fit/data 2\.9\d at tau = 0\.01 s first\)", line), line
     assert _noise_warnings(noise) == [f"- WARNING: {line} (`noise/axes/gx_dps/`).", ""]
     assert f"WARNING: {line}." in noise.summary().notes
+
+
+def test_the_horizon_and_min_tau_take_durations_with_units():
+    import argparse
+
+    import pytest
+
+    from fosmodel.cli.arguments import duration
+    from fosmodel.cli.parser import build_parser
+
+    assert (duration("30s"), duration("2min"), duration("0.5h"), duration("45")) == (
+        30.0, 120.0, 1800.0, 45.0)
+    with pytest.raises(argparse.ArgumentTypeError) as err:
+        duration("30 sec")
+    assert str(err.value) == ("expected a duration like 30s, 5min or 1h (a bare number is in "
+                              "seconds), got '30 sec'")
+    args = build_parser().parse_args(["imu", "rec.csv", "--horizon", "1min", "--min-tau",
+                                      "0.2s", "--out", "x"])
+    assert (args.horizon, args.min_tau) == (60.0, 0.2)

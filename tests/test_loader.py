@@ -1,5 +1,6 @@
 import gzip
 import importlib.util
+import re
 
 import numpy as np
 import pandas as pd
@@ -656,7 +657,8 @@ def test_a_second_time_column_is_left_unread(tmp_path):
 
 
 def test_a_warm_up_is_a_slow_excursion_not_outliers(tmp_path):
-    # a die temperature warming 15 C over the first half hour, on 0.01 C steps otherwise still
+    # a die temperature warming 15 C over the first half hour, on 0.01 C steps otherwise still:
+    # its long runs beyond the bounds are noted as a slow excursion, not counted as outliers
     t = np.arange(360_000) / 100.0
     temp = np.round(40.0 - 15.0 * np.exp(-t / 600.0)
                     + np.random.default_rng(4).normal(0, 0.02, t.size), 2)

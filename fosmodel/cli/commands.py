@@ -419,7 +419,7 @@ def _sensor_of(rec: Record, column: str) -> str | None:
 
 
 def allan(args: argparse.Namespace) -> int:
-    json_path = writable_file(args.json) if args.json else None
+    json_path = writable_file(args.json, created=args.out) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     if args.columns:

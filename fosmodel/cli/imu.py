@@ -21,10 +21,10 @@ from .arguments import (
     STATIC_ONLY_HELP,
     UNITS_HELP,
     add_loader_options,
+    duration,
     inflation,
     int_list,
     name_list,
-    positive_float,
     positive_int,
 )
 from .flags import with_flags
@@ -73,11 +73,11 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
                         help="the loop's segments, if not those of --split: " + SPLIT_HELP
                         + " (default: the study's, so that both score on one prediction "
                           "segment)")
-    parser.add_argument("--horizon", type=positive_float, default="30",
-                        help="outage horizon in seconds")
-    parser.add_argument("--min-tau", type=positive_float,
-                        help="shortest averaging time of the Allan fits, in s (default: found "
-                             "per axis)")
+    parser.add_argument("--horizon", type=duration, default="30s",
+                        help="outage horizon: 30s, 2min (a bare number is in seconds)")
+    parser.add_argument("--min-tau", type=duration,
+                        help="shortest averaging time of the Allan fits, e.g. 0.1s (default: "
+                             "found per axis)")
     parser.add_argument("--static-only", action="store_true", help=STATIC_ONLY_HELP)
     parser.add_argument("--inflate", type=inflation, default="1", metavar="K", help=INFLATE_HELP)
 
@@ -104,7 +104,7 @@ def imu(args: argparse.Namespace) -> int:
     from ..workflows.imu_report import axis_handoffs, console_summary, write_imu_report
     from .commands import _checked, _load
 
-    json_path = writable_file(args.json) if args.json else None
+    json_path = writable_file(args.json, created=args.out) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     from ..noise.checks import unused_columns

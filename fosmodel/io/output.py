@@ -80,16 +80,26 @@ def refuse_overwrite(outputs: Paths, inputs: Paths) -> None:
                                  "give each output its own name")
 
 
-def writable_file(path: str | os.PathLike[str]) -> Path:
+def writable_file(path: str | os.PathLike[str],
+                  created: str | os.PathLike[str] | None = None) -> Path:
     """Return ``path`` as an output file, checked before anything is read or computed.
+
+    ``created`` is a report directory the command makes before it writes ``path``
+    (:func:`writable_directory`): a file directly in it is accepted though it does not exist yet.
 
     Raises
     ------
     InputError
-        If its directory does not exist or cannot be written, or it is a directory, a
-        device, a FIFO or a socket (an output replaces only a regular file).
+        If its directory does not exist (nor is ``created``) or cannot be written, or it is
+        a directory, a device, a FIFO or a socket (an output replaces only a regular file).
     """
     out = Path(path)
+    if created is not None and out.parent.absolute() == Path(created).absolute():
+        writable_directory(created)
+        if out.is_dir():
+            raise InputError(f"cannot write {out}: it is a directory")
+        files.check_replaceable(out)
+        return out
     if not out.parent.is_dir():
         raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
     if out.is_dir():

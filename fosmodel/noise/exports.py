@@ -323,7 +323,7 @@ def openvins_yaml(e: NoiseExport, rostopic: str = "/imu0") -> str:
              "sigma_w^2/dt and sigma_wb^2*dt.",
              "# OpenVINS's calibration guide advises inflating Allan values \"maybe 10-20x\" "
              "for a moving platform",
-             "# (an export's inflation factor multiplies every value); keep this file's name: "
+             "# (the exports' inflation factor); keep this file's name: "
              "estimator_config.yaml's relative_config_imu names it.", "", "imu0:", "  T_i_b:",
              "    - [1.0, 0.0, 0.0, 0.0]", "    - [0.0, 1.0, 0.0, 0.0]",
              "    - [0.0, 0.0, 1.0, 0.0]", "    - [0.0, 0.0, 0.0, 1.0]"]

@@ -329,7 +329,8 @@ class ImuNoise:
             sheet = [inflate * a.fit.bias_stability()[0] / FLICKER_FLOOR
                      * to_si_scale(sensor, a.axis.units) for a in axes]
             lines.append("%   datasheet bias instability (fit minimum / 0.664): "
-                         + " ".join(f"{v:.6e}" for v in sheet))
+                         + " ".join(f"{v:.6e}" if math.isfinite(v) else "none (no minimum)"
+                                    for v in sheet))
             pairs = []
             for term, prop in (("N", "NoiseDensity"), ("B", "BiasInstability"),
                                ("K", "RandomWalk")):
