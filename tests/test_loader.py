@@ -1,6 +1,5 @@
 import gzip
 import importlib.util
-import re
 
 import numpy as np
 import pandas as pd
