@@ -14,6 +14,7 @@ those standard errors are calibrated.
 
 import json
 import math
+from dataclasses import replace
 
 import allantools
 import numpy as np
@@ -474,3 +475,36 @@ def test_cli_reads_the_units_in_a_column_s_name(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "Units:                              g" in out
     assert "Sensor:                         accel" in out
+
+
+@pytest.mark.parametrize(("n", "seed"), [(20_000, 2), (216_000, 5), (60_000, 0)])
+def test_no_minimum_on_a_curve_that_only_falls(n, seed):
+    """White noise alone: the curve's lowest point, among its last noisy taus, is no minimum
+    (these draws put it at 177 s of 222 s and 1210 s of 2400 s)."""
+    read = readoff(allan_deviation(np.random.default_rng(seed).normal(size=n), 10.0))
+    assert math.isnan(read["min_adev"]) and math.isnan(read["min_tau_s"])
+    assert math.isnan(read["B"]) and math.isnan(read["K"])
+
+
+def test_a_wiggle_of_the_last_taus_is_no_k_line():
+    """A -1/2 curve whose last point jumps up (few clusters there): its two-point slope is
+    +1/2, but over half a decade the curve falls, so there is no K read-off."""
+    res = allan_deviation(np.random.default_rng(1).normal(size=60_000), 10.0)
+    log_t = np.log10(res.taus)
+    adev = 10 ** (-0.5 * log_t)
+    adev[-1] = adev[-2] * 10 ** (0.5 * (log_t[-1] - log_t[-2]))
+    read = readoff(replace(res, adev=adev))
+    assert math.isnan(read["K"])
+    assert read["N"] == pytest.approx(1.0)
+
+
+def test_a_flat_floor_is_a_minimum_and_a_rise_makes_one():
+    """White noise and a random walk: the curve falls, floors and rises, and the minimum is
+    read where it is; the K read-off is on the +1/2 stretch."""
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=200_000) + np.cumsum(0.003 * rng.normal(size=200_000))
+    res = allan_deviation(x, 10.0)
+    read = readoff(res)
+    i = int(np.argmin(res.adev))
+    assert read["min_adev"] == res.adev[i] and 0 < i < len(res.taus) - 2
+    assert read["K"] == pytest.approx(0.003 * math.sqrt(10.0), rel=0.3)

@@ -192,9 +192,15 @@ def test_random_walk_starts_from_its_spread_about_the_training_mean():
     spread = np.var(walks[:, -1] - walks.mean(axis=1))
     assert spread == pytest.approx(p0[2, 2], rel=0.05)
     coupled = allan_state_space(_noise_fit({"N": N, "K": K}))
-    bad = replace(coupled, Phi=np.array([[0.0, 0.1], [0.0, 1.0]]))
-    with pytest.raises(InputError, match="coupled"):
-        initial_covariance(bad, n)
+    # a walk coupled to another state gets the damped solve: q n / 3 on the walk, the
+    # coupled state its share of it beside its own white noise
+    linked = replace(coupled, Phi=np.array([[0.0, 0.1], [0.0, 1.0]]))
+    p0 = initial_covariance(linked, n)
+    q_walk = linked.Q[1, 1]
+    assert p0[1, 1] == pytest.approx(q_walk / (1 - (1 - 1.5 / n) ** 2), rel=1e-9)
+    assert p0[1, 1] == pytest.approx(q_walk * n / 3, rel=0.01)
+    assert p0[0, 0] == pytest.approx(linked.Q[0, 0] + 0.01 * p0[1, 1], rel=1e-3)
+    assert np.all(np.linalg.eigvalsh(p0) > 0)
 
 
 def test_position_filter_on_the_models_own_data_is_consistent():

@@ -702,8 +702,8 @@ def test_close_loop_reads_the_units_in_a_column_s_name(tmp_path, capsys):
     assert code == 0, err
     lines = out.splitlines()
     assert lines[0] == ("prediction segment: MSE (deg/s)^2, outage position error (m), "
-                        "bias RMS (deg/s)")
-    assert lines[2].split()[-2] != "-"  # the outage error of the starting model, in metres
+                        "free-run bias RMS (deg/s)")
+    assert lines[3].split()[-2] != "-"  # the outage error of the starting model, in metres
 
 
 @pytest.mark.slow
@@ -717,7 +717,7 @@ def test_close_loop_on_a_readable_header_takes_any_channel_as_input(readable_csv
                            model], capsys)
     assert code == 0, err
     assert out.startswith("prediction segment: MSE (g)^2, outage position error (m), "
-                          "bias RMS (g)\n")
+                          "free-run bias RMS (g)\n")
     assert "kept companion Accel Y (g) as an input, as asked (fast part, lags 0-10)" in err
     fitted = FOSModel.from_dict(json.loads(model.read_text()))
     code, out, err = _run(["predict", readable_csv, "--model", model, "--rate", "100", "--out",

@@ -80,13 +80,16 @@ def test_a_bad_compensation_is_refused_in_one_line():
         FOSModel(rate=RATE, compensation=COMP).fit(y)
 
 
-def test_a_compensated_model_does_not_export_a_state_space_that_would_drop_it():
+def test_a_compensated_model_exports_its_compensation_as_the_feedthrough():
     from fosmodel.filter.statespace import to_state_space
 
     y, channels = _record()
     model = FOSModel(max_lag=2, rate=RATE, compensation=COMP).fit(y, channels)
-    with pytest.raises(InputError, match="carries a compensation"):
-        to_state_space(model)
+    ss = to_state_space(model)
+    u = ss.input_matrix(channels, N)
+    comp = sum(w * derive(name, N, RATE, channels, {}) for name, w in COMP.items())
+    np.testing.assert_allclose(u @ ss.D[0], comp, rtol=0, atol=1e-9)
+    assert ss.mu == pytest.approx(model.offsets_["y"])
 
 
 def test_held_weights_are_least_squares_with_the_level_and_lags_summing_to_one():

@@ -116,6 +116,16 @@ def _report_over_input(tmp):
             "--split", "30s,20s", "--no-levels", "--out", str(tmp)]
 
 
+def _spiky_driver(tmp):
+    """A gyro record whose die temperature, a driver of its model, has 40 spikes."""
+    n = 6000
+    rng = np.random.default_rng(2)
+    rows = [f"{k / 100!r},{g:.6f},{25 + k / 1e4 + (40 if k % 150 == 0 else 0):.4f}"
+            for k, g in enumerate(0.05 * rng.standard_normal(n))]
+    path = _write(tmp, "\n".join(["time,gx,temp_c", *rows]) + "\n")
+    return ["close-loop", path, "--column", "gx", "--out", str(tmp / "report")]
+
+
 def _model_edit(tmp, edit):
     """``predict`` with a model file whose fitted state ``edit`` changes (in place)."""
     def edited(data):
@@ -214,6 +224,15 @@ BUILDERS = {
     "too few samples for the candidates": lambda tmp: _fit(tmp, _record(), "--degree", "2"),
     "constant record":
         lambda tmp: _fit(tmp, "time,gx\n" + "".join(f"{k / 100},1\n" for k in range(50))),
+    "column of zeros":
+        lambda tmp: _fit(tmp, "time,gx\n" + "".join(f"{k / 100},0\n" for k in range(50))),
+    "denormal numbers": lambda tmp: _fit(tmp, "time,gx\n" + "".join(
+        f"{k / 100},{(-1) ** k * 3e-310!r}\n" for k in range(50))),
+    "integers beyond float64's exact range": lambda tmp: _fit(tmp, "time,gx\n" + "".join(
+        f"{k / 100},{2**64 - 1 - 4096 * k}\n" for k in range(50))),
+    "an output that is a device, FIFO or socket":
+        lambda tmp: _fit(tmp, _record())[:-1] + ["/dev/null"],
+    "outliers on a driver of the model (`close-loop`)": _spiky_driver,
     "a compressed file that expands far": _bomb,
     "a compressed line that does not end":
         lambda tmp: _fit(tmp, gzip.compress(b"gx\n1\n" + b"0" * 20 * 2**20, 9), "--rate",

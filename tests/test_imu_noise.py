@@ -263,3 +263,18 @@ def test_each_axis_sets_every_convention_side_by_side(noise):
             "-" if not math.isfinite(minimum) else
             f"{fit.navigation('B', minimum)[0]:.3g} {fit.navigation('B', minimum)[1]} at "
             f"{fit.readoff['min_tau_s']:.3g} s")
+
+
+def test_the_json_may_go_into_the_report_directory_the_command_makes(six_axes, tmp_path,
+                                                                      capsys):
+    out = tmp_path / "out1"
+    code, _, err = _run(["allan", six_axes, "--rate", RATE, "--column", "gx_dps", "--out", out,
+                         "--json", out / "x.json"], capsys)
+    assert code == 0, err
+    assert json.loads((out / "x.json").read_text())["column"] == "gx_dps"
+    assert (out / "report.md").exists() or any(out.iterdir())
+    code, _, err = _run(["allan", six_axes, "--rate", RATE, "--column", "gx_dps", "--out",
+                         tmp_path / "out2", "--json", tmp_path / "elsewhere" / "x.json"], capsys)
+    assert code == 2 and not (tmp_path / "out2").exists()
+    assert err.strip() == (f"fosmodel: error: cannot write {tmp_path / 'elsewhere' / 'x.json'}: "
+                           f"directory {tmp_path / 'elsewhere'} does not exist")

@@ -653,3 +653,21 @@ def test_a_second_time_column_is_left_unread(tmp_path):
     rec = load_record(p)
     assert rec.names == ["gx"] and rec.rate == pytest.approx(100)
     assert "column 'timestamp_ns' is another time column: the time is 'time'" in rec.notes[0]
+
+
+def test_a_warm_up_is_a_slow_excursion_not_outliers(tmp_path):
+    # a die temperature warming 15 C over the first half hour, on 0.01 C steps otherwise still:
+    # its long runs beyond the bounds are noted as a slow excursion, not counted as outliers
+    t = np.arange(360_000) / 100.0
+    temp = np.round(40.0 - 15.0 * np.exp(-t / 600.0)
+                    + np.random.default_rng(4).normal(0, 0.02, t.size), 2)
+    rec = load_record(_write(tmp_path, {"time": t, "temp_c": temp}))
+    assert rec.outliers["temp_c"].size == 0  # the warm-up is the signal: none refused or counted
+    notes = [n for n in rec.notes if n.startswith("column 'temp_c'")]
+    assert len(notes) == 1
+    slow = int(notes[0].split()[2])
+    assert slow > 1000
+    assert notes[0] == (
+        f"column 'temp_c': {slow} sample(s) outside [{_bounds(temp)[0]:.6g}, "
+        f"{_bounds(temp)[1]:.6g}] where the median of the 101 samples about them is far out too, a "
+        "slow excursion (a warm-up, a drift): not counted as outliers, kept")

@@ -115,7 +115,12 @@ def test_the_close_loop_console_fits_100_columns_with_many_terms(tmp_path, capsy
     assert code == 0, stderr
     lines = (stdout + stderr).replace(str(out.resolve()), "OUT").splitlines()
     assert max(len(line) for line in lines) <= 100, max(lines, key=len)
+    head = next(line for line in stdout.splitlines() if line.startswith("row  Model"))
+    assert re.search(r"  MSE +err\. \d+ s +bias RMS \d+ s$", head), head  # never cut
     kept = [line for line in stdout.splitlines() if re.match(r"\s+[1-9]\d*  driver ", line)]
+    for line in kept:  # and every value whole
+        assert all(re.fullmatch(r"-|\d\.\d+(e[+-]\d+)?|\d+(\.\d+)?", v)
+                   for v in line.split()[-3:]), line
     assert len(kept) >= 3
     counts = [int(line.split("...")[1].split()[0]) for line in kept]
     effects = pd.read_csv(out / "effects.csv")

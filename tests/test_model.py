@@ -519,3 +519,22 @@ def test_a_long_fit_makes_no_centred_copy_of_the_record(monkeypatch):
     finally:
         tracemalloc.stop()
     assert peak < 0.5 * y.nbytes  # a centred copy alone would be y.nbytes
+
+
+def test_levels_auto_is_the_clis_twin_and_a_bad_word_is_named_whole():
+    from fosmodel.core.levels import levels_for
+
+    rng = np.random.default_rng(0)
+    y = np.cumsum(0.01 * rng.normal(size=20_000)) + rng.normal(size=20_000)
+    model = FOSModel(levels="auto", rate=10.0).fit(y)
+    assert model.levels_ == list(levels_for(y, 10.0)) and model.levels == "auto"
+    assert any(t.startswith("level@") for t in model.terms_)
+    again = FOSModel.from_dict(model.to_dict())  # saved with the levels chosen
+    np.testing.assert_array_equal(again.predict(y), model.predict(y))
+    with pytest.raises(InputError) as err:
+        FOSModel(levels="automatic", rate=10.0).fit(y)
+    assert str(err.value) == ("levels must be 'auto' or a list of time constants in seconds, "
+                              "got 'automatic'")
+    with pytest.raises(InputError, match="levels='auto' takes its time constants from the "
+                                         "record: they are chosen in fit()"):
+        FOSModel(levels="auto", rate=10.0).candidate_spec()

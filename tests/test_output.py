@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from fosmodel.core import files
 from fosmodel.core.exceptions import InputError
 from fosmodel.io.output import (
     atomic_write,
@@ -114,14 +115,18 @@ def test_an_output_may_not_name_an_input_however_spelt(tmp_path, monkeypatch):
 def test_a_temporary_file_of_a_killed_run_goes_with_the_next_write(tmp_path):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    stale = tmp_path / f".out.txt.{dead.pid}.0123456789ab.tmp"
+    out = tmp_path / "out.txt"
+    stale = tmp_path / files._temporary_name(out, dead.pid, "0123456789ab", ".tmp")
     stale.write_text("half")
-    kept = tmp_path / f".out.txt.{dead.pid}.0123456789ab.kept"  # a killed command's undo copy
+    kept = tmp_path / files._temporary_name(out, dead.pid, "0123456789ab", ".kept")  # an undo copy
     kept.write_text("old")
-    live = tmp_path / f".out.txt.{os.getpid()}.0123456789ab.tmp"  # another write in progress
+    live = tmp_path / files._temporary_name(out, os.getpid(), "0123456789ab", ".tmp")  # busy
     live.write_text("busy")
-    write_text(tmp_path / "out.txt", "new")
-    assert sorted(p.name for p in tmp_path.iterdir()) == [live.name, "out.txt"]
+    unsigned = tmp_path / f".out.txt.{dead.pid}.0123456789ab.tmp"  # a user's file of that form
+    unsigned.write_text("mine")
+    write_text(out, "new")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, unsigned.name,
+                                                                 "out.txt"])
 
 
 def test_new_files_follow_the_umask(tmp_path):

@@ -95,7 +95,8 @@ def test_every_metric_of_the_report_is_defined_where_it_appears(result, tmp_path
     assert ("- Outage position error (m, 30 s): in each of 5 outages of 30 s spread evenly "
             "over the prediction segment (600-1200 s of the record), the model's free run") \
         in notes
-    assert "- Bias RMS tau s (deg/s): the RMS of the means of the one-step residual" in notes
+    assert ("- One-step bias RMS tau s (deg/s): the RMS of the means of the one-step "
+            "residual") in notes
     assert "- Evaluate MSE (deg/s)^2: the same on the evaluation segment (300-600 s" in notes
     tex = (tmp_path / "comparison.tex").read_text()
     assert "equivalent position error" in tex and "free runs of 30" in tex

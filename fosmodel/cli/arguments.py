@@ -95,6 +95,15 @@ def durations(text: str) -> tuple[float, ...]:
     return tuple(out)
 
 
+def duration(text: str) -> float:
+    """``30s``, ``5min``, ``1h`` or a bare number of seconds -> one positive duration in s."""
+    m = _DURATION.match(text.strip())
+    if not m or not np.isfinite(float(m.group(1))) or float(m.group(1)) <= 0:
+        raise argparse.ArgumentTypeError(f"expected a duration like 30s, 5min or 1h (a bare "
+                                         f"number is in seconds), got {text!r}")
+    return float(m.group(1)) * _SECONDS[m.group(2) or "s"]
+
+
 def name_list(text: str) -> list[str]:
     """Read ``a,b,c`` into its names (blanks dropped)."""
     return [p.strip() for p in text.split(",") if p.strip()]

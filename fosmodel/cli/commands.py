@@ -15,7 +15,7 @@ import importlib
 import json
 import sys
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -34,22 +34,34 @@ from .flags import with_flags
 
 if TYPE_CHECKING:
     from ..loop.closeloop import LoopResult
+    from ..loop.handoff import Handoff
     from ..loop.sessions import SessionsResult
     from ..models.model import FOSModel
 
 
 def _load(args: argparse.Namespace, path: str | None = None,
-          columns: list[str] | None = None, notes: bool = True) -> Record:
+          columns: list[str] | None = None, notes: bool = True,
+          analysed: Sequence[str] | Callable[[Record], Sequence[str]] | None = None,
+          feeds: str = "", drivers: Sequence[str] = ()) -> Record:
     """Load the record of ``path`` (default ``args.file``) with the loader options.
 
-    Only ``columns`` (default: all) are read and checked.  Its notes go to
-    stderr, after the file's name when ``path`` is given, unless not ``notes``
-    (:func:`_checked` says them after its checks).
+    Only ``columns`` (default: all) are read and checked.  Its ``analysed`` columns (the
+    modelled ones and the model's drivers; or a function of the record that names them;
+    default ``columns``) are refused on their content, the others the loader held left out
+    with a note (:func:`fosmodel.io.content.settle`; ``feeds`` says what they would have
+    fed).  Its notes go to stderr, after the file's name when ``path`` is given, unless not
+    ``notes`` (:func:`_checked` says them after its checks).
     """
+    from ..io.content import settle
+
     rec = load_record(path or args.file, columns=columns, rate=args.rate,
                       scale=parse_scales(args.scale or []), uniform=args.uniform,
                       outliers=args.outliers, gaps=args.gaps, topic=args.topic,
-                      temperature_topic=args.temperature_topic)
+                      temperature_topic=args.temperature_topic, hold=True)
+    analysed = analysed if analysed is not None else columns
+    rec = settle(rec, (analysed(rec) if callable(analysed) else analysed
+                       if analysed is not None else [*rec.names, *rec.held]), feeds,
+                 drivers)
     if notes:
         for note in rec.notes:
             print(f"fosmodel: note: {path + ': ' if path else ''}{with_flags(note)}",
@@ -69,7 +81,8 @@ def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
     if stretch:
         print(f"fosmodel: note: {stretch}", file=sys.stderr)
     for note in rec.notes:
-        print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{note}", file=sys.stderr)
+        print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{with_flags(note)}",
+              file=sys.stderr)
     return kept
 
 
@@ -267,6 +280,7 @@ LOOP_FLAGS = {"horizons_s": "--horizons", "train": "--split", "evaluate": "--spl
 def close_loop(args: argparse.Namespace) -> int:
     from ..loop.closeloop import LoopConfig
     from ..loop.closeloop import close_loop as run_loop
+    from ..loop.handoff import hand_off
     from ..loop.loop_report import CONSOLE_WIDTH, console_summary, write_loop_report
     from ..loop.roles import channel_roles
 
@@ -277,7 +291,30 @@ def close_loop(args: argparse.Namespace) -> int:
                      {f"the record {i + 1}": f for i, f in enumerate(args.files)})
     several = len(args.files) > 1
     args.file = args.files[0]  # a single record's notes are not prefixed with its name
-    recs = [_load(args, path if several else None) for path in args.files]
+
+    drivers: list[str] = []  # of the record being loaded
+
+    def analysed(r: Record) -> list[str]:
+        """Name the modelled column, the drivers of its slow forms and the inputs asked for.
+
+        A column of no numbers (booleans, text) is no driver, and an inertial axis (a
+        companion; a gyro's accelerometers, offered in their fast part only) is not
+        analysed: a refusal of one becomes a note, and it is left out.
+        """
+        names = [n for n in r.names if n != args.column]
+        try:
+            axis = _axes(args, [args.column], r, optional=True)
+            roles = channel_roles(names, axis[0].sensor if axis else _sensor_of(r, args.column),
+                                  aux=args.aux or (),
+                                  sensors={c: s for c in names if (s := _sensor_of(r, c))})
+        except (InputError, OptionError):  # said by the checks below
+            return [args.column]
+        drivers[:] = [*roles.slow, *roles.opted_in]
+        return [args.column, *drivers]
+
+    recs = [_load(args, path if several else None, analysed=analysed,
+                  feeds="the loop's cross-axis table and fast inputs",
+                  drivers=drivers) for path in args.files]
     rec = recs[0]
     axis = _axes(args, [args.column], rec, optional=True)
     channels = [{name: r.column(name) for name in r.names if name != args.column}
@@ -304,20 +341,30 @@ def close_loop(args: argparse.Namespace) -> int:
         return _close_sessions(args, recs, channels, config, say, title, out, json_path,
                                model_path)
     result = run_loop(rec.column(args.column), channels[0], config, progress=say)
+    handoff = hand_off(result, rec.column(args.column), channels[0], sensor=config.sensor,
+                       units=config.units, column=args.column)
     meta = {"source": rec.source, "column": args.column, "rate_hz": rec.rate,
-            "n_samples": rec.n_samples, "fitted_on": "close-loop fitting segment"}
-    return _loop_outputs(args, result, lambda tmp: write_loop_report(result, tmp, title),
-                         console_summary(result), meta, out, json_path, model_path,
-                         ("residual loop report", "final model"))
+            "n_samples": rec.n_samples,
+            "fitted_on": "all the record; structure chosen on the close-loop segments"}
+
+    def write_report(tmp: Path) -> None:
+        write_loop_report(result, tmp, title)
+        handoff.write(tmp / "filter", {"source": rec.source, "column": args.column})
+        handoff.append_to(tmp / "report.md")
+
+    return _loop_outputs(args, result, write_report, console_summary(result), meta, out,
+                         json_path, model_path, ("residual loop report", "final model"),
+                         handoff)
 
 
 def _loop_outputs(args: argparse.Namespace, result: LoopResult | SessionsResult,
                   write_report: Callable[[Path], object], console: str, meta: dict,
                   out: Path, json_path: Path | None, model_path: Path | None,
-                  names: tuple[str, str]) -> int:
+                  names: tuple[str, str], handoff: Handoff | None = None) -> int:
     """Write a loop's report, model and JSON, and say where: one record's or the sessions'.
 
-    ``names`` are what the last line calls the report and the model.
+    ``names`` are what the last line calls the report and the model; with ``handoff`` the
+    model is its refit on all the data, and the JSON gains its ``"filter"`` entry.
     """
     from ..io.model_file import write_model
 
@@ -327,10 +374,13 @@ def _loop_outputs(args: argparse.Namespace, result: LoopResult | SessionsResult,
         bound, which = result.handed_on()
         meta = {**meta, "effects": [step.effect.describe() for step in result.steps],
                 "model": which}
-        write_model(model_path, bound.model, meta)
+        write_model(model_path, handoff.final if handoff else bound.model, meta)
     print(console)
     if json_path:
-        write_text(json_path, json.dumps(result.to_json_dict(), indent=1) + "\n")
+        found = result.to_json_dict()
+        if handoff is not None:
+            found["filter"] = handoff.to_dict()
+        write_text(json_path, json.dumps(found, indent=1) + "\n")
     print(f"{names[0]} written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else "")
           + (f"; {names[1]} written to {model_path}" if model_path else ""))
@@ -369,7 +419,7 @@ def _sensor_of(rec: Record, column: str) -> str | None:
 
 
 def allan(args: argparse.Namespace) -> int:
-    json_path = writable_file(args.json) if args.json else None
+    json_path = writable_file(args.json, created=args.out) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     if args.columns:
@@ -423,11 +473,10 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
         if joint is not None:
             write_text(tmp / "joint_model.json", json.dumps(joint.to_dict(), indent=1) + "\n")
     print(noise.summary())
-    for a in noise.axes:
-        if a.fit.misses():
-            print(f"warning: {a.axis.column}: the IEEE Std 952 fit misses the measured Allan "
-                  "deviation beyond its 95 % interval; see its figure's lower panel",
-                  file=sys.stderr)
+    for line in noise.export_notes(args.inflate):
+        print(f"warning: {line}", file=sys.stderr)
+    for line in noise.fit_warnings():
+        print(f"warning: {line}", file=sys.stderr)
     if json_path:
         write_text(json_path, json.dumps(noise.to_dict(args.inflate), indent=1) + "\n")
     print(f"Allan noise report of {len(axes)} axes written to {out.resolve()}/"

@@ -21,10 +21,10 @@ from .arguments import (
     STATIC_ONLY_HELP,
     UNITS_HELP,
     add_loader_options,
+    duration,
     inflation,
     int_list,
     name_list,
-    positive_float,
     positive_int,
 )
 from .flags import with_flags
@@ -73,11 +73,11 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
                         help="the loop's segments, if not those of --split: " + SPLIT_HELP
                         + " (default: the study's, so that both score on one prediction "
                           "segment)")
-    parser.add_argument("--horizon", type=positive_float, default="30",
-                        help="outage horizon in seconds")
-    parser.add_argument("--min-tau", type=positive_float,
-                        help="shortest averaging time of the Allan fits, in s (default: found "
-                             "per axis)")
+    parser.add_argument("--horizon", type=duration, default="30s",
+                        help="outage horizon: 30s, 2min (a bare number is in seconds)")
+    parser.add_argument("--min-tau", type=duration,
+                        help="shortest averaging time of the Allan fits, e.g. 0.1s (default: "
+                             "found per axis)")
     parser.add_argument("--static-only", action="store_true", help=STATIC_ONLY_HELP)
     parser.add_argument("--inflate", type=inflation, default="1", metavar="K", help=INFLATE_HELP)
 
@@ -91,6 +91,7 @@ def workflow_settings(args: argparse.Namespace) -> dict[str, Any]:
 
 def imu(args: argparse.Namespace) -> int:
     """Run the six-axis workflow on ``args.file`` and publish its report in ``args.out``."""
+    from ..core.exceptions import InputError
     from ..io.output import (
         refuse_overwrite,
         report_directory,
@@ -98,16 +99,24 @@ def imu(args: argparse.Namespace) -> int:
         writable_file,
         write_text,
     )
+    from ..io.record import Record
     from ..workflows.imu import ImuConfig, record_axes, run_imu
-    from ..workflows.imu_report import console_summary, write_imu_report
+    from ..workflows.imu_report import axis_handoffs, console_summary, write_imu_report
     from .commands import _checked, _load
 
-    json_path = writable_file(args.json) if args.json else None
+    json_path = writable_file(args.json, created=args.out) if args.json else None
     out = writable_directory(args.out)
     refuse_overwrite({"--json": json_path}, {"the record": args.file})
     from ..noise.checks import unused_columns
 
-    rec = _load(args, notes=False)  # every column: an IMU record has few; its temperature too
+    def analysed(r: Record) -> list[str]:  # the axes and the temperature
+        try:
+            axes, aux = record_axes(r, args.columns, args.units, args.temperature)
+        except InputError:  # said below, by record_axes itself
+            return []
+        return [*(a.column for a in axes), *aux]
+
+    rec = _load(args, notes=False, analysed=analysed)  # every column: its temperature too
     axes, aux = record_axes(rec, args.columns, args.units, args.temperature)
     rec = _checked(args, rec, axes)
     aux = {name: rec.column(name) for name in aux}  # the static stretch's, if one was kept
@@ -130,11 +139,16 @@ def imu(args: argparse.Namespace) -> int:
                      aux=aux, config=config,
                      progress=lambda line: print(f"fosmodel: {line}", file=sys.stderr,
                                                  flush=True))
+    handoffs = axis_handoffs(result, {a.column: rec.column(a.column) for a in axes}, aux)
     with report_directory(out, [args.file]) as tmp:
-        write_imu_report(result, tmp, args.title or Path(args.file).name)
+        write_imu_report(result, tmp, args.title or Path(args.file).name, handoffs)
     print(console_summary(result))
+    for line in [*result.noise.fit_warnings(), *result.noise.export_notes(config.inflate)]:
+        print(f"warning: {line}", file=sys.stderr)
     if json_path:
-        write_text(json_path, json.dumps(result.to_dict(), indent=1) + "\n")
+        found = result.to_dict()
+        found["filter"] = {column: h.to_dict() for column, h in handoffs.items()}
+        write_text(json_path, json.dumps(found, indent=1) + "\n")
     print(f"six-axis report of {len(axes)} axes written to {out.resolve()}/"
           + (f" and {json_path}" if json_path else ""))
     return 0

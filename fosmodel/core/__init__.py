@@ -26,7 +26,7 @@ if TYPE_CHECKING:
         generate_terms,
     )
     from .correlations import LagCorrelations
-    from .derived import power_name
+    from .derived import Description, derive, describe, power_name
     from .exceptions import (
         FitWarning,
         FOSModelError,
@@ -44,7 +44,7 @@ else:
         "candidates": ("CandidateSpec", "Term", "count_candidates", "evaluate_terms",
                        "generate_terms"),
         "correlations": ("LagCorrelations",),
-        "derived": ("power_name",),
+        "derived": ("Description", "derive", "describe", "power_name"),
         "exceptions": ("FOSModelError", "FitWarning", "InputError", "NotFittedError",
                        "UnstableModelWarning"),
         "fos": ("DataCorrelations", "FOSResult", "StopRule", "center"),
@@ -55,8 +55,9 @@ else:
     })
 
 __all__ = [
-    "CandidateSpec", "DataCorrelations", "FOSModelError", "FOSResult", "FitWarning",
-    "InputError", "LagCorrelations", "NotFittedError", "PartTimes", "StopRule", "Term",
-    "UnstableModelWarning", "center", "clear_plans", "count_candidates", "evaluate_terms",
-    "generate_terms", "in_workers", "layout", "levels_for", "power_name", "timed_parts",
+    "CandidateSpec", "DataCorrelations", "Description", "FOSModelError", "FOSResult",
+    "FitWarning", "InputError", "LagCorrelations", "NotFittedError", "PartTimes", "StopRule",
+    "Term", "UnstableModelWarning", "center", "clear_plans", "count_candidates", "derive",
+    "describe", "evaluate_terms", "generate_terms", "in_workers", "layout", "levels_for",
+    "power_name", "timed_parts",
 ]

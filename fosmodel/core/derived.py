@@ -34,13 +34,18 @@ name, where spaces, ``*``, ``^`` and brackets have a meaning of their own.
 
 Time functions restart at the first sample of the record they are computed
 for: a trend or a step fitted on one recording is a statement about time since
-*its* start.
+*its* start.  :func:`derive` takes ``start``, the index of the first sample it computes
+in that record, so that a later stretch of it (the second half a filter runs on) gets
+the time of the fitting record: ``t = (start + n) / rate``.  The columns that read a
+channel start their memory (a lag's, a local level's) at the first sample they are
+given.  :func:`describe` gives a column's definition and unit in words.
 """
 
 from __future__ import annotations
 
 import re
 from collections.abc import Iterable, Mapping
+from typing import NamedTuple
 
 import numpy as np
 from scipy.signal import lfilter
@@ -235,15 +240,30 @@ def first_order_lag(x: np.ndarray, tau_s: float, rate: float) -> np.ndarray:
 
 
 def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
-           offsets: Mapping[str, float]) -> np.ndarray:
+           offsets: Mapping[str, float], start: int = 0) -> np.ndarray:
     """Compute the column ``name`` over ``n`` samples at ``rate`` Hz.
 
     Parameters
     ----------
+    name : str
+        A derived column's name (the module's table).
+    n : int
+        Samples to compute.
+    rate : float
+        Sample rate in Hz.
     channels : mapping of str to ndarray
-        The record's channels by their names (for the columns that read one).
+        The record's channels by their names (for the columns that read one), from the first
+        sample computed on.
     offsets : mapping of str to float
         Training means of the channels (for ``sq(<channel>)``).
+    start : int
+        Index of the first sample computed in the record whose first sample is time zero:
+        the functions of time are those of ``t = (start + k) / rate``.  Columns that read a
+        channel do not depend on it.
+
+    Returns
+    -------
+    ndarray of shape (n,)
 
     Raises
     ------
@@ -259,7 +279,7 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
         base, p, centre = found[1], int(found[2]), float(found[3])
         kind_of_base, text = _power_base(base) or ("", "")
         x = (_channel(name, text, n, channels) if kind_of_base == "channel"
-             else derive(text, n, rate, channels, offsets))
+             else derive(text, n, rate, channels, offsets, start))
         return (x - centre) ** p
     if kind == "channel":
         return _channel(name, found[1], n, channels)
@@ -280,7 +300,9 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
         if kind == "lowpass":
             return lagged
         return np.r_[0.0, np.diff(lagged) * rate] if n else lagged
-    t = np.arange(n) / rate
+    if start < 0:
+        raise InputError(f"start must be a sample index (0 or more), got {start}")
+    t = (start + np.arange(n)) / rate
     arg = float(found[1]) if len(found) > 1 else 0.0
     if kind == "cos":
         return np.cos(2 * np.pi * arg * t)
@@ -291,6 +313,82 @@ def derive(name: str, n: int, rate: float, channels: Mapping[str, np.ndarray],
     if kind == "exp":
         return np.exp(-t / arg)
     return (t >= arg).astype(float)
+
+
+class Description(NamedTuple):
+    """What a derived column holds, in words, and its unit."""
+
+    definition: str
+    unit: str
+    """``"s"``, ``"1"`` (dimensionless), or built from ``[<channel>]``, the unit of the
+    channel read (``"[temp_c]^2"``, ``"[temp_c]/s"``), where it is not given."""
+
+
+def describe(name: str, units: Mapping[str, str] | None = None) -> Description:
+    """Return the definition and the unit of the derived column ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A derived column's name (the module's table).
+    units : mapping of str to str, optional
+        Units of the channels by their names; a channel not in it is written ``[<name>]``.
+
+    Returns
+    -------
+    Description
+
+    Raises
+    ------
+    InputError
+        Not a derived name.
+
+    Examples
+    --------
+    >>> describe("exp(-t/413.66s)").definition
+    'exp(-t / 413.66 s), t = (start + n) / rate in s'
+    >>> describe("rate(temp_c,60s)", {"temp_c": "degC"}).unit
+    'degC/s'
+    """
+    found = parse(name)
+    if found is None or not is_derived(name):
+        raise InputError(f"column {name!r} is not one fosmodel can derive")
+    kind, args = found[0], found[1:]
+    time = "t = (start + n) / rate in s"
+
+    def unit_of(token: str) -> str:
+        channel = token_channel(token)
+        return (units or {}).get(channel, f"[{channel}]")
+
+    if kind in ("cos", "sin"):
+        return Description(f"{kind}(2 pi {args[0]} Hz t), {time}", "1")
+    if kind == "time":
+        return Description(f"t, {time}", "s")
+    if kind == "exp":
+        return Description(f"exp(-t / {args[0]} s), {time}", "1")
+    if kind == "step":
+        return Description(f"1 where t >= {args[0]} s, else 0; {time}", "1")
+    if kind == "channel":
+        return Description(f"the channel {token_channel(args[0])!r} as measured",
+                           unit_of(args[0]))
+    if kind == "power":
+        base, p, centre = args
+        inner = (describe(base, units) if _IDENTIFIER.match(base) is None
+                 else Description(f"the channel {token_channel(base)!r}", unit_of(base)))
+        return Description(f"({inner.definition} - {centre})^{p}", f"({inner.unit})^{p}")
+    channel, unit = token_channel(args[0]), unit_of(args[0])
+    if kind == "square":
+        return Description(f"(x - mean)^2 of the channel {channel!r}, mean its training mean",
+                           f"({unit})^2")
+    if kind == "fast":
+        return Description(f"the channel {channel!r} minus its local level over {args[1]} s "
+                           "(exponentially weighted mean of its earlier samples, started at "
+                           f"the mean of its first {args[1]} s)", unit)
+    lag = (f"s[n] = s[n-1] + (x[n] - s[n-1]) / ({args[1]} s * rate), s[0] = x[0], x the "
+           f"channel {channel!r}")
+    if kind == "lowpass":
+        return Description(f"first-order lag {lag}", unit)
+    return Description(f"(s[n] - s[n-1]) * rate (0 at n = 0), {lag}", f"{unit}/s")
 
 
 def _level_from_mean(x: np.ndarray, tau_s: float, rate: float) -> np.ndarray:

@@ -3,8 +3,13 @@
 Every file fosmodel writes goes through :func:`atomic_write`: the content is written to a
 temporary file in the destination directory and renamed over the destination, so an
 interrupted run never leaves a half-written result.  The temporary file's name carries the
-writer's process id: one left behind by a killed run is removed by the next write to the
-same destination.  Here, at the bottom of the layers, so that a fitted model can save itself
+writer's process id, a random token and a signature of the three (:func:`temporary_path`):
+one left behind by a killed run is removed by the next write to the same destination, and
+only when it proves its own (:func:`stale_temporaries`): its signature holds, its writer is
+gone, it belongs to this user, a file is no hard link of another, and it is no file a
+command was given (:func:`protect`).  An output goes only to a regular file or a new path:
+never over a device, a FIFO or a socket (:func:`check_replaceable`).  Here, at the bottom
+of the layers, so that a fitted model can save itself
 (:meth:`fosmodel.models.model.FOSModel.save`); :mod:`fosmodel.io.output` builds reports on it.
 
 Every file fosmodel reads whole into memory (a model file) goes through :func:`read_bounded`:
@@ -16,31 +21,118 @@ from its metadata, and at most a given number of bytes is read.  Here too, so th
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import os
 import re
 import shutil
 import stat
 import uuid
 from collections.abc import Callable, Iterator
+from contextvars import ContextVar
 from pathlib import Path
 from typing import IO
 
 from .exceptions import InputError
 
+#: Signs the temporary files' names: a name no user file matches by accident.
+_SIGNATURE_KEY = b"fosmodel temporary file"
+#: The files and directories the running command was given, by real path and by (device,
+#: inode): never removed.  None outside :func:`given_files`.
+_GIVEN: ContextVar[tuple[set[str], set[tuple[int, int]]] | None] = ContextVar("given",
+                                                                               default=None)
+
+
+def _signature(name: str, pid: int, token: str, suffix: str) -> str:
+    text = f"{name}\0{pid}\0{token}\0{suffix}".encode()
+    return hashlib.blake2b(text, key=_SIGNATURE_KEY, digest_size=8).hexdigest()
+
+
+def _temporary_name(path: Path, pid: int, token: str, suffix: str) -> str:
+    return f".{path.name}.{pid}.{token}{_signature(path.name, pid, token, suffix)}{suffix}"
+
 
 def temporary_path(path: Path, suffix: str) -> Path:
-    """Return a fresh name beside ``path`` that carries this process's id."""
-    return path.parent / f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}{suffix}"
+    """Return a fresh name beside ``path``: this process's id, a random token, their signature."""
+    return path.parent / _temporary_name(path, os.getpid(), uuid.uuid4().hex[:12], suffix)
+
+
+@contextlib.contextmanager
+def given_files() -> Iterator[None]:
+    """Scope of one command: the files :func:`protect` marks inside it are never removed."""
+    token = _GIVEN.set((set(), set()))
+    try:
+        yield
+    finally:
+        _GIVEN.reset(token)
+
+
+def protect(*paths: str | os.PathLike[str]) -> None:
+    """Mark files or directories the command was given: no cleanup inside its scope removes them.
+
+    Outside :func:`given_files` (a library call) the signed names alone keep a user's files.
+    """
+    given = _GIVEN.get()
+    if given is None:
+        return
+    for path in paths:
+        given[0].add(os.path.realpath(path))
+        with contextlib.suppress(OSError):
+            info = os.stat(path)
+            given[1].add((info.st_dev, info.st_ino))
+
+
+def _given(path: Path, info: os.stat_result) -> bool:
+    given = _GIVEN.get()
+    return given is not None and ((info.st_dev, info.st_ino) in given[1]
+                                  or os.path.realpath(path) in given[0])
 
 
 def stale_temporaries(path: Path, suffix: str) -> Iterator[Path]:
-    """Temporary files or directories for ``path`` whose writer is no longer running."""
-    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(\d+)\.[0-9a-f]{{12}}{re.escape(suffix)}$")
+    """Temporary files or directories for ``path`` that a writer no longer running left.
+
+    Only those that prove their own: a name of :func:`temporary_path` whose signature holds,
+    a dead writer's id, this user's, a regular file that is no hard link of another file (or
+    a real directory, none of whose files is so), and nothing :func:`protect` marked.
+    """
+    pattern = re.compile(rf"^\.{re.escape(path.name)}\.(\d+)\.([0-9a-f]{{12}})([0-9a-f]{{16}})"
+                         rf"{re.escape(suffix)}$")
     with contextlib.suppress(OSError):
         for item in path.parent.iterdir():
             m = pattern.match(item.name)
-            if m and not _alive(int(m.group(1))):
+            if (m and m.group(3) == _signature(path.name, int(m.group(1)), m.group(2), suffix)
+                    and not _alive(int(m.group(1))) and _ours(item, path)):
                 yield item
+
+
+def _ours(item: Path, path: Path) -> bool:
+    """Whether ``item`` is as this process's writers leave it, and no file a command was given.
+
+    A regular file has no other link, but for ``path`` itself: the copy of a destination kept
+    by a writer killed before it replaced it is a second link to it.
+    """
+    try:
+        info = item.lstat()
+    except OSError:
+        return False
+    if info.st_uid != os.getuid() or _given(item, info):
+        return False
+    if stat.S_ISREG(info.st_mode):
+        if info.st_nlink == 2:
+            with contextlib.suppress(OSError):
+                target = path.lstat()
+                return (target.st_dev, target.st_ino) == (info.st_dev, info.st_ino)
+        return info.st_nlink == 1
+    if not stat.S_ISDIR(info.st_mode):
+        return False
+    try:
+        for inner in item.rglob("*"):
+            inner_info = inner.lstat()
+            if _given(inner, inner_info) or (stat.S_ISREG(inner_info.st_mode)
+                                             and inner_info.st_nlink != 1):
+                return False
+    except OSError:
+        return False
+    return True
 
 
 def _alive(pid: int) -> bool:
@@ -50,7 +142,7 @@ def _alive(pid: int) -> bool:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except PermissionError:  # another user's process
+    except (PermissionError, OverflowError, ValueError):  # another user's, or no pid at all
         return True
     return True
 
@@ -62,6 +154,35 @@ def remove_path(item: Path) -> None:
     else:
         with contextlib.suppress(FileNotFoundError):
             item.unlink()
+
+
+def check_replaceable(path: str | os.PathLike[str]) -> None:
+    """Refuse an output path that names something other than a regular file or nothing.
+
+    A device, a FIFO or a socket (or a symbolic link to one) is never replaced: renaming a
+    file over ``/dev/null`` would replace the system's node.
+
+    Raises
+    ------
+    InputError
+        ``cannot write PATH: a device, not a regular file; ...``.
+    """
+    try:
+        info = os.stat(path)
+    except OSError:  # nothing there (or a broken link): a new path
+        return
+    if stat.S_ISREG(info.st_mode) or stat.S_ISDIR(info.st_mode):
+        return  # a directory is the callers' to name (a report's, or a refusal of their own)
+    target = f" ({os.path.realpath(path)})" if os.path.islink(path) else ""
+    raise InputError(f"cannot write {path}{target}: {_kind(info)}, not a regular file; "
+                     "fosmodel writes outputs only to regular files or new paths")
+
+
+def _kind(info: os.stat_result) -> str:
+    return ("a directory" if stat.S_ISDIR(info.st_mode) else
+            "a FIFO" if stat.S_ISFIFO(info.st_mode) else
+            "a device" if stat.S_ISCHR(info.st_mode) or stat.S_ISBLK(info.st_mode) else
+            "a socket" if stat.S_ISSOCK(info.st_mode) else "not a regular file")
 
 
 @contextlib.contextmanager
@@ -104,6 +225,7 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", *,
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
+        check_replaceable(path)
         replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
@@ -148,6 +270,7 @@ def read_bounded(path: str | os.PathLike[str], what: str, max_bytes: int) -> byt
         message names it and why).
     """
     path = Path(path)
+    protect(path)
     try:
         _check_regular(path, os.stat(path), what)
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
@@ -179,9 +302,5 @@ def read_bounded(path: str | os.PathLike[str], what: str, max_bytes: int) -> byt
 def _check_regular(path: Path, info: os.stat_result, what: str) -> None:
     if stat.S_ISREG(info.st_mode):
         return
-    kind = ("a directory" if stat.S_ISDIR(info.st_mode) else
-            "a FIFO" if stat.S_ISFIFO(info.st_mode) else
-            "a device" if stat.S_ISCHR(info.st_mode) or stat.S_ISBLK(info.st_mode) else
-            "a socket" if stat.S_ISSOCK(info.st_mode) else "not a regular file")
     target = f" ({os.path.realpath(path)})" if path.is_symlink() else ""
-    raise InputError(f"cannot read {what} {path}{target}: {kind}, not a {what} file")
+    raise InputError(f"cannot read {what} {path}{target}: {_kind(info)}, not a {what} file")

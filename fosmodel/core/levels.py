@@ -214,7 +214,7 @@ def levels_for(y: np.ndarray, rate: float, count: int = 4) -> tuple[float, ...]:
     n = len(y)
     m = np.unique(np.geomspace(1, max(1, n // 10), 30).astype(int))
     taus, adev = allantools.oadev(np.asarray(y, dtype=float), rate=rate, data_type="freq",
-                                  taus=m / rate)[:2]
+                                  taus=(m + 0.1) / rate)[:2]  # m back, truncated or rounded
     k = int(np.argmin(adev))
     floor = float(taus[k]) if k < len(taus) - 1 else None  # still falling: no floor seen
     return level_grid(n, rate, floor, count)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 from collections.abc import Iterable, Mapping
 
 import numpy as np
@@ -13,8 +14,18 @@ from .exceptions import InputError
 
 
 def did_you_mean(name: str, options: Iterable[str]) -> str:
-    """``" (did you mean 'x'?)"`` for the closest option, or an empty string."""
-    close = difflib.get_close_matches(name, list(options), n=1, cutoff=0.6)
+    """``" (did you mean 'x'?)"`` for the closest option, or an empty string.
+
+    An option that is ``name`` with a suffix (``gz_rads`` for ``gz``, ``Accel X (g)`` for
+    ``accel x``) comes first; else the closest by :func:`difflib.get_close_matches`.
+    """
+    options = list(options)
+    key = name.strip().lower()
+    suffixed = [o for o in options if key and o.lower() != key
+                and re.match(re.escape(key) + r"[\s_.\-(\[]", o.lower())]
+    if suffixed:
+        return f" (did you mean {suffixed[0]!r}?)"
+    close = difflib.get_close_matches(name, options, n=1, cutoff=0.6)
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 

@@ -40,7 +40,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import block_diag
+from scipy.linalg import block_diag, solve_discrete_lyapunov
 
 from ..core.exceptions import InputError
 from ..noise.allan import FLICKER_FLOOR
@@ -222,7 +222,8 @@ def allan_state_space(fit: NoiseFit, mu: float = 0.0) -> StateSpace:
     n = len(phi)
     return StateSpace(Phi=np.diag(phi), B=np.zeros((n, 0)), G=np.eye(n), H=np.ones((1, n)),
                       Q=np.diag(q), mu=float(mu),
-                      state_names=tuple(STATE_NAMES[k] for k in values), input_names=())
+                      state_names=tuple(STATE_NAMES[k] for k in values), input_names=(),
+                      rate=float(fit.result.rate))
 
 
 def model_adev(error: StateSpace, taus: ArrayLike, rate: float) -> np.ndarray:
@@ -306,28 +307,43 @@ def assemble_axes(axes: Mapping[str, StateSpace]) -> StateSpace:
         raise InputError(f"axis {multi[0]!r} has {axes[multi[0]].H.shape[0]} outputs; each "
                          "axis must have one")
     parts = list(axes.values())
+    rates = {s.rate for s in parts}
     return StateSpace(
         Phi=block_diag(*(s.Phi for s in parts)), B=block_diag(*(s.B for s in parts)),
         G=block_diag(*(s.G for s in parts)), H=block_diag(*(s.H for s in parts)),
-        Q=block_diag(*(s.Q for s in parts)), mu=0.0,
+        Q=block_diag(*(s.Q for s in parts)), mu=0.0, D=block_diag(*(s.D for s in parts)),
+        rate=rates.pop() if len(rates) == 1 else None,
         state_names=tuple(f"{a}: {n}" for a, s in axes.items() for n in s.state_names),
         input_names=tuple(f"{a}: {n}" for a, s in axes.items() for n in s.input_names))
+
+
+#: Largest ``|eigenvalue|`` of a transition taken as stable; above it a state is a unit root
+#: (or worse) and gets the damped covariance of :func:`initial_covariance`.
+STABLE_RADIUS = 1.0 - 1e-9
 
 
 def initial_covariance(error: StateSpace, n_samples: int) -> np.ndarray:
     """Covariance of an error model's state when filtering starts after calibration.
 
     The filter starts after ``n_samples`` of training whose mean was removed as the calibrated
-    bias.  Stable states start from their stationary covariance (the mean takes little of
-    them).  A random walk (a state with ``Phi`` 1 on its diagonal, coupled to no other) has no
+    bias.  A stable model starts from its stationary covariance (the mean takes little of
+    it).  A random walk (a state with ``Phi`` 1 on its diagonal, coupled to no other) has no
     stationary covariance; it starts from the spread of its last training value about the
     training mean, ``q (n - 1)(2n - 1) / (6n)`` with ``q`` its variance per step (``K^2 T/3``
     for a training time ``T``), which is what the calibration leaves of it.
 
+    Any other model with a unit root (a local level coupled to an AR part, a drift, a loop's
+    final model held to a level) starts from the damped solve ``P = (rho Phi) P (rho Phi)' +
+    G Q G'``, ``rho = (1 - 3 / (2 n)) / max|eig(Phi)|``: its stable directions keep about
+    their stationary covariance, and a unit root's direction gets ``q / (2 (1 - rho))``,
+    ``q n / 3``, the spread a walk's last training value has about the training mean (as
+    above): a large, finite prior that the measurements then narrow.
+
     Parameters
     ----------
     error : StateSpace
-        An error model (:func:`allan_state_space` or :func:`assemble_axes`).
+        An error model (:func:`allan_state_space`, :func:`assemble_axes`,
+        :func:`~fosmodel.filter.statespace.to_state_space`, ...).
     n_samples : int
         Training samples behind the calibrated bias.
 
@@ -338,25 +354,37 @@ def initial_covariance(error: StateSpace, n_samples: int) -> np.ndarray:
     Raises
     ------
     InputError
-        A random walk coupled to other states (through ``Phi`` or the driving noise), fewer
-        than one sample, or unstable states that are not random walks.
+        Fewer than one sample.
     """
     if n_samples < 1:
         raise InputError(f"n_samples must be at least 1, got {n_samples}")
-    phi, gqg = error.Phi, error.G @ error.Q @ error.G.T
+    phi, gqg = error.Phi, error.process_covariance()
+    radius = float(np.max(np.abs(np.linalg.eigvals(phi)))) if phi.size else 0.0
+    if radius < STABLE_RADIUS:
+        return error.stationary_covariance()
     walks = np.isclose(np.diag(phi), 1.0)
     rest = ~walks
     coupled = [a[np.ix_(walks, rest)] for a in (phi, phi.T, gqg)]
-    if any(np.any(c != 0.0) for c in coupled) or not np.array_equal(
-            phi[np.ix_(walks, walks)], np.eye(walks.sum())):
-        raise InputError("a random-walk state is coupled to other states; its initial "
-                         "covariance is not the calibrated walk's")
+    decoupled = not any(np.any(c != 0.0) for c in coupled) and np.array_equal(
+        phi[np.ix_(walks, walks)], np.eye(walks.sum()))
+    sub_radius = (float(np.max(np.abs(np.linalg.eigvals(phi[np.ix_(rest, rest)]))))
+                  if rest.any() else 0.0)
+    if not decoupled or sub_radius >= STABLE_RADIUS:
+        return _damped_covariance(phi, gqg, radius, n_samples)
     p0 = np.zeros_like(phi)
     n = n_samples
     p0[np.ix_(walks, walks)] = gqg[np.ix_(walks, walks)] * (n - 1) * (2 * n - 1) / (6 * n)
     if rest.any():
         p0[np.ix_(rest, rest)] = _subsystem(error, rest, gqg).stationary_covariance()
     return p0
+
+
+def _damped_covariance(phi: np.ndarray, gqg: np.ndarray, radius: float,
+                       n_samples: int) -> np.ndarray:
+    """``P = (rho Phi) P (rho Phi)' + G Q G'`` with ``rho`` (1 - 3/(2n)) / radius, symmetrised."""
+    rho = (1.0 - 1.5 / max(n_samples, 2)) / radius
+    p = solve_discrete_lyapunov(rho * phi, gqg)
+    return (p + p.T) / 2.0
 
 
 def _subsystem(error: StateSpace, keep: np.ndarray, gqg: np.ndarray) -> StateSpace:

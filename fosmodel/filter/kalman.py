@@ -11,6 +11,9 @@ symmetric and positive semi-definite over long runs with precise measurements.
 
 from __future__ import annotations
 
+import functools
+import os
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -111,7 +114,8 @@ class FilterRun(NamedTuple):
     """ndarray of shape (N, n): the diagonals of their covariances."""
 
 
-def run_filter(kf: KalmanFilter, z: ArrayLike, inputs: ArrayLike | None = None) -> FilterRun:
+def run_filter(kf: KalmanFilter, z: ArrayLike, inputs: ArrayLike | None = None, *,
+               engine: str = "numpy") -> FilterRun:
     """Predict each sample, and update where a measurement is given.
 
     Parameters
@@ -122,14 +126,36 @@ def run_filter(kf: KalmanFilter, z: ArrayLike, inputs: ArrayLike | None = None) 
         Measurements; NaN marks a sample without one (prediction only).
     inputs : array-like of shape (N, m), optional
         ``u`` of each sample, for a filter with inputs.
+    engine : {"numpy", "numba", "auto"}
+        ``"numba"`` runs the compiled loop of :mod:`fosmodel.filter.kalman_numba` (a scalar
+        measurement only; the ``fast`` extra); ``"auto"`` does so where it can (numba
+        installed, ``FOSMODEL_NUMBA`` not ``0``, one measurement) and runs the NumPy loop
+        otherwise.  Both give the same estimates to rounding (the compiled loop leaves
+        ``kf.K`` as it was).
 
     Returns
     -------
     FilterRun
+
+    Raises
+    ------
+    InputError
+        An unknown engine, ``"numba"`` without numba or with a vector measurement, or
+        inputs missing for a filter with inputs.
     """
+    if engine not in ("numpy", "numba", "auto"):
+        raise InputError(f"engine must be 'numpy', 'numba' or 'auto', got {engine!r}")
     zs = np.asarray(z, dtype=float)
     zs = zs.reshape(len(zs), -1)
     us = None if inputs is None else np.asarray(inputs, dtype=float)
+    if engine != "numpy":
+        kernel = _compiled_filter()
+        usable = kernel is not None and zs.shape[1] == 1
+        if engine == "numba" and not usable:
+            raise InputError("engine='numba' needs numba (pip install 'fosmodel[fast]') and a "
+                             "scalar measurement")
+        if usable and kernel is not None:
+            return _run_compiled(kernel, kf, zs[:, 0], us)
     xs = np.empty((len(zs), len(kf.x)))
     var = np.empty_like(xs)
     measured = np.isfinite(zs).all(axis=1)
@@ -139,3 +165,28 @@ def run_filter(kf: KalmanFilter, z: ArrayLike, inputs: ArrayLike | None = None) 
             kf.update(zk)
         xs[k], var[k] = kf.x, kf.P.diagonal()
     return FilterRun(xs, var)
+
+
+def _run_compiled(kernel: Callable[..., tuple], kf: KalmanFilter, z: np.ndarray,
+                  us: np.ndarray | None) -> FilterRun:
+    m = kf.B.shape[1]
+    if m and us is None:
+        raise InputError(f"this filter has {m} input(s); u is needed")
+    u = np.zeros((len(z), 0)) if us is None or not m else np.ascontiguousarray(
+        us.reshape(len(z), m))
+    xs, var, x, p = kernel(kf.Phi, kf.GQG, np.ascontiguousarray(kf.H[0]), float(kf.R[0, 0]),
+                           np.ascontiguousarray(kf.B), kf.x, kf.P, np.ascontiguousarray(z), u)
+    kf.x, kf.P = x, p
+    return FilterRun(xs, var)
+
+
+@functools.cache
+def _compiled_filter() -> Callable[..., tuple] | None:
+    """Return the numba loop, or None without numba or with ``FOSMODEL_NUMBA=0``."""
+    if os.environ.get("FOSMODEL_NUMBA", "1") == "0":
+        return None
+    try:
+        from .kalman_numba import scalar_filter
+    except ImportError:
+        return None
+    return scalar_filter

@@ -16,10 +16,13 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
-import uuid
+import signal
+import threading
 from collections.abc import Iterator
 from contextvars import ContextVar
 from pathlib import Path
+
+from ..core import files
 
 #: The outputs put in place so far in this context: (destination, the file it replaced or
 #: None); None outside :func:`all_or_nothing` or inside :func:`durable`.
@@ -35,9 +38,11 @@ def all_or_nothing() -> Iterator[None]:
     published: list[tuple[Path, Path | None]] = []
     token = _PUBLISHED.set(published)
     try:
-        yield
+        with files.given_files():  # the command's inputs: no cleanup of temporaries removes them
+            yield
     except BaseException:
-        _undo(published)
+        with _uninterrupted():  # a second Ctrl-C must not leave the undo half done
+            _undo(published)
         raise
     else:
         for _, kept in published:
@@ -61,12 +66,13 @@ def replace(source: Path, destination: Path) -> None:
     """Rename ``source`` onto ``destination`` (``os.replace``), undoably inside all_or_nothing."""
     published = _PUBLISHED.get()
     if published is None:
+        files.check_replaceable(destination)
         os.replace(source, destination)
         return
+    files.check_replaceable(destination)
     kept = None
     if destination.is_symlink() or destination.is_file():  # a symbolic link is kept as one
-        kept = destination.with_name(
-            f".{destination.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}{KEPT}")
+        kept = files.temporary_path(destination, KEPT)
         try:
             os.link(destination, kept, follow_symlinks=False)
         except OSError:  # a file system without hard links
@@ -80,6 +86,19 @@ def created(path: Path) -> None:
     published = _PUBLISHED.get()
     if published is not None:
         published.append((path, None))
+
+
+@contextlib.contextmanager
+def _uninterrupted() -> Iterator[None]:
+    """Ignore Ctrl-C inside the block (in the main thread, where signals are handled)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, handler)
 
 
 def _undo(published: list[tuple[Path, Path | None]]) -> None:

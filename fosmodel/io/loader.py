@@ -46,6 +46,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..core import files
 from ..core.exceptions import InputError
 from ..core.validation import did_you_mean
 from .csv_reader import Preamble, preamble_rate
@@ -88,6 +89,7 @@ def load_record(
     gaps: str = "refuse",
     topic: str | None = None,
     temperature_topic: str | None = None,
+    hold: bool = False,
 ) -> Record:
     """Read and validate a record.
 
@@ -137,6 +139,11 @@ def load_record(
         The topic of a log whose temperature becomes the ``temperature`` column,
         interpolated onto the IMU samples' times (a bag's only temperature topic
         by default).
+    hold : bool, default False
+        Hold, rather than raise, the refusals a column's content earns (cells that are no
+        finite real numbers, booleans, outliers under "refuse"): the column is left out and
+        its refusal put in ``Record.held``, for :func:`fosmodel.io.content.settle` to raise
+        if the column is analysed and to note otherwise.  The time column is never held.
 
     Returns
     -------
@@ -157,6 +164,7 @@ def load_record(
     """
     path = Path(path)
     src = str(path)
+    files.protect(path)  # no cleanup of an output's temporaries removes it
     if rate is not None and not RATE_RANGE[0] <= rate <= RATE_RANGE[1]:
         raise InputError(f"the sample rate must be a positive number of Hz, from "
                          f"{RATE_RANGE[0]:g} to {RATE_RANGE[1]:g}, got {rate!r}")
@@ -174,7 +182,10 @@ def load_record(
     keep = _kept(names, columns, scale or {}, src)
     blocks, n_rows = ((iter([pd.DataFrame(log.columns)[keep or names]]), None) if log else
                       _blocks(path, preamble.header_index, names, keep))
-    data = convert(blocks, n_rows, src, first_line)
+    held: dict[str, str] | None = {} if hold else None
+    data = convert(blocks, n_rows, src, first_line, held)
+    if held and not [c for c in data if c not in TIME_COLUMNS]:  # nothing else to analyse
+        raise InputError(next(iter(held.values())))
     if not len(next(iter(data.values()))):
         raise InputError(f"{src}: header only, no data rows")
     notes: list[str] = log.notes if log else []
@@ -189,18 +200,24 @@ def load_record(
                      f"{other!r} is not read")
     if not data:
         raise InputError(f"{src}: only a time column, no data columns")
+    counts = None  # an integer time column and its counts per second, for an exact rate
     if time is not None and time_name not in (scale or {}):
         unit = time_unit(time_name, time, rate)
+        if time.dtype.kind == "i" and round(1 / unit.seconds) * unit.seconds == 1.0:
+            counts = (time, round(1 / unit.seconds))
         if unit.unit != "s":
-            time = time * unit.seconds
             notes.append(unit.note(time_name))
+        time = (time - time[0]) * unit.seconds + float(time[0]) * unit.seconds \
+            if time.dtype.kind == "i" else time * unit.seconds
+    elif time is not None:
+        time = time.astype(float)
     units = {name: unit for name, unit in (log.units if log else {}).items()
              if name in data and name not in (scale or {})}
     note_integer_columns(data, [*(scale or {}), *units], notes)
     segments = None
     if time is not None:
         rate, time = time_base(time, rate, given_by, uniform, src, time_name, first_line,
-                                notes, gaps)
+                                notes, gaps, counts)
         if gaps not in REFUSING and not uniform:
             time, segments = handle_gaps(data, time, gaps, src, time_name, first_line, notes)
     else:
@@ -211,8 +228,9 @@ def load_record(
     found = find_outliers(data)
     record = Record(src, data, float(rate) if rate is not None else None, time, notes,
                     log.metadata if log else metadata,
-                    {name: out.samples for name, out in found.items()}, segments, units)
-    handle_outliers(record, found, outliers, first_line)
+                    {name: out.samples for name, out in found.items()}, segments, units,
+                    dict(held or {}))
+    handle_outliers(record, found, outliers, first_line, hold)
     return record
 
 

@@ -67,6 +67,7 @@ def refuse_overwrite(outputs: Paths, inputs: Paths) -> None:
     """
     outs = [(k, v) for k, v in outputs.items() if v is not None]
     ins = [(k, v) for k, v in inputs.items() if v is not None]
+    files.protect(*(source for _, source in ins))  # no cleanup of temporaries removes them
     for label, path in outs:
         for what, source in ins:
             if same_file(path, source):
@@ -79,19 +80,31 @@ def refuse_overwrite(outputs: Paths, inputs: Paths) -> None:
                                  "give each output its own name")
 
 
-def writable_file(path: str | os.PathLike[str]) -> Path:
+def writable_file(path: str | os.PathLike[str],
+                  created: str | os.PathLike[str] | None = None) -> Path:
     """Return ``path`` as an output file, checked before anything is read or computed.
+
+    ``created`` is a report directory the command makes before it writes ``path``
+    (:func:`writable_directory`): a file directly in it is accepted though it does not exist yet.
 
     Raises
     ------
     InputError
-        If its directory does not exist or cannot be written, or it is a directory.
+        If its directory does not exist (nor is ``created``) or cannot be written, or it is
+        a directory, a device, a FIFO or a socket (an output replaces only a regular file).
     """
     out = Path(path)
+    if created is not None and out.parent.absolute() == Path(created).absolute():
+        writable_directory(created)
+        if out.is_dir():
+            raise InputError(f"cannot write {out}: it is a directory")
+        files.check_replaceable(out)
+        return out
     if not out.parent.is_dir():
         raise InputError(f"cannot write {out}: directory {out.parent} does not exist")
     if out.is_dir():
         raise InputError(f"cannot write {out}: it is a directory")
+    files.check_replaceable(out)
     _check_writable(out, out.parent)
     return out
 
@@ -106,7 +119,9 @@ def writable_directory(path: str | os.PathLike[str]) -> Path:
     """
     out = Path(path)
     if out.exists() and not out.is_dir():
-        raise InputError(f"cannot write a report into {out}: it is a file, not a directory")
+        kind = "a file" if out.is_file() else ("a FIFO" if out.is_fifo() else "a socket"
+                                               if out.is_socket() else "a device")
+        raise InputError(f"cannot write a report into {out}: it is {kind}, not a directory")
     base = out
     while not base.is_dir():  # itself, or where it will be made
         base = base.parent
@@ -232,6 +247,8 @@ def publish(tmp: Path, out: Path, protected: Iterable[str | os.PathLike[str]] = 
         target = out / item.relative_to(tmp)
         if not target.exists():
             continue
+        if not (target.is_file() or target.is_dir()):
+            files.check_replaceable(target)
         for source in protected:
             if same_file(target, source):
                 raise InputError(f"writing the report into {out} would replace {source}, a "

@@ -41,6 +41,10 @@ class Record:
     units : dict of str to str
         The units of the columns whose file says them (a ROS bag's or a ULog's
         ``gx``: ``"rad/s"``); a column scaled with ``scale`` loses its entry.
+    held : dict of str to str
+        With ``load_record(..., hold=True)``, the columns whose content would have refused the
+        record, each with the one-line refusal: refused if analysed, else left out with a note
+        (:func:`fosmodel.io.content.settle`).
     """
 
     def require_contiguous(self, what: str) -> None:
@@ -59,6 +63,7 @@ class Record:
     outliers: dict[str, np.ndarray] = field(default_factory=dict)
     segments: list[slice] | None = None
     units: dict[str, str] = field(default_factory=dict)
+    held: dict[str, str] = field(default_factory=dict)
 
     @property
     def n_samples(self) -> int:

@@ -31,12 +31,15 @@ RATE_RANGE = (1e-6, 1e9)
 
 def time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool, src: str,
                name: str, first_line: int, notes: list[str],
-               gaps: str = "refuse") -> tuple[float, np.ndarray]:
+               gaps: str = "refuse",
+               counts: tuple[np.ndarray, int] | None = None) -> tuple[float, np.ndarray]:
     """Return the rate and time of a record with a time column, after checking the column.
 
     With ``gaps`` that do not refuse, the gap check is left to :func:`handle_gaps`
     and the rate is the median interval's.  A rate no IMU has is refused unless ``--rate``
-    gave it (:func:`check_imu_rate`).
+    gave it (:func:`check_imu_rate`).  ``counts``, the column's integers and their counts per
+    second (1000 for milliseconds), give the rate from integer differences: int64
+    milliseconds 10 apart are exactly 100 Hz, whatever their epoch.
     """
     if len(time) < 2:
         if rate is None:
@@ -52,6 +55,12 @@ def time_base(time: np.ndarray, rate: float | None, given_by: str, uniform: bool
         measured = (len(time) - 1) / (time[-1] - time[0])  # uniform: the span is the best one
         if gaps not in REFUSING and not (bursty or uniform):
             measured = 1.0 / step  # with gaps, the span would count them
+    if counts is not None and counts[0][-1] > counts[0][0]:  # in exact integer arithmetic
+        ticks, per_second = counts
+        span = int(ticks[-1]) - int(ticks[0])
+        measured = (len(ticks) - 1) * per_second / span
+        if gaps not in REFUSING and not (bursty or uniform):
+            measured = per_second / int(median(np.diff(ticks)))
     if not RATE_RANGE[0] <= measured <= RATE_RANGE[1]:
         raise InputError(f"{src}: column {name!r} gives a sample rate of {measured:.6g} Hz, "
                          f"outside {RATE_RANGE[0]:g} to {RATE_RANGE[1]:g} Hz; is it in seconds? "

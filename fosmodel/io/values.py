@@ -30,7 +30,7 @@ Block: TypeAlias = "pd.DataFrame | dict[str, np.ndarray]"  # a block of rows, by
 
 
 def convert(blocks: Iterator[Block], n_rows: int | None, src: str,
-             first_line: int) -> dict[str, np.ndarray]:
+             first_line: int, held: dict[str, str] | None = None) -> dict[str, np.ndarray]:
     """Gather the blocks' columns as finite float64, or an error naming the first bad cell.
 
     With the row count known (``.npy``, Parquet) each column is written into an
@@ -40,16 +40,36 @@ def convert(blocks: Iterator[Block], n_rows: int | None, src: str,
     is held to :func:`_memory_budget`, so a file far larger than the machine
     fails early (at its first block, when its length is known) and says how
     much it would take.
+
+    With ``held`` (a dict to fill), a column other than the time whose cells are no finite
+    real numbers does not refuse the record: its refusal is put in ``held`` and the column
+    left out (the caller refuses it if it is analysed).
     """
     columns = _Columns(n_rows, src)
     for block in blocks:
-        converted = {str(c): _numeric(block[c], src, str(c), first_line, columns.offset)
-                     for c in block}
+        converted = {}
+        for c in block:
+            name = str(c)
+            if held is not None and name in held:
+                continue
+            try:
+                converted[name] = _numeric(block[c], src, name, first_line, columns.offset)
+            except InputError as exc:
+                if held is None or name in TIME_COLUMNS:
+                    raise
+                held[name] = str(exc)
+                columns.forget(name)
         _check_time_block(converted, columns.last_time, src, first_line, columns.offset)
         columns.add(converted)
     data = columns.gathered()
-    for name, arr in data.items():
-        _check_finite(arr, src, name, first_line)
+    for name in list(data):
+        try:
+            _check_finite(data[name], src, name, first_line)
+        except InputError as exc:
+            if held is None or name in TIME_COLUMNS:
+                raise
+            held[name] = str(exc)
+            del data[name]
     return data
 
 
@@ -73,7 +93,7 @@ class _Columns:
             if self.n_rows is None:
                 self.parts.setdefault(name, []).append(values)
             else:
-                self.full.setdefault(name, np.empty(self.n_rows))[
+                self.full.setdefault(name, np.empty(self.n_rows, dtype=values.dtype))[
                     self.offset : self.offset + rows] = values
             if name == time_name and rows:
                 self.last_time = values[-1:].copy()
@@ -88,6 +108,11 @@ class _Columns:
                              f"column(s) {verb} {held / 2**30:.1f} GiB as float64, more "
                              f"than the {self.budget / 2**30:.1f} GiB this machine has free; "
                              "read fewer columns (columns=) or a shorter stretch")
+
+    def forget(self, name: str) -> None:
+        """Drop a column read so far (one left out of the record)."""
+        self.parts.pop(name, None)
+        self.full.pop(name, None)
 
     def gathered(self) -> dict[str, np.ndarray]:
         if self.n_rows is not None:
@@ -149,6 +174,8 @@ def _numeric(col: pd.Series | np.ndarray, src: str, name: str, first_line: int,
     """
     import pandas as pd  # here: loaded by the first record read, not by the parser
 
+    if name in TIME_COLUMNS and col.dtype.kind in "iu" and _fits_int64(col):
+        return np.asarray(col, dtype=np.int64)  # counts, differenced as integers
     if isinstance(col, np.ndarray):
         if col.dtype.kind in "fiu":
             return col.astype(float, copy=False)
@@ -174,6 +201,11 @@ def _numeric(col: pd.Series | np.ndarray, src: str, name: str, first_line: int,
     return col.to_numpy(dtype=float)
 
 
+def _fits_int64(col: pd.Series | np.ndarray) -> bool:
+    """Whether a column of integers fits in int64 (a uint64 one may not)."""
+    return col.dtype.kind == "i" or not len(col) or int(np.max(col)) < 2**63
+
+
 def _check_finite(arr: np.ndarray, src: str, name: str, first_line: int) -> None:
     if _within(arr, np.inf):
         return
@@ -191,6 +223,8 @@ def apply_scale(data: dict[str, np.ndarray], scale: Mapping[str, float], src: st
                  notes: list[str]) -> None:
     """Multiply each column named in ``scale`` by its factor, and note it."""
     for name, factor in scale.items():  # the names are checked against the header by _kept
+        if name not in data:  # a column left out (its refusal held): nothing to scale
+            continue
         if not (np.isfinite(factor) and factor != 0):
             raise InputError(f"{src}: scale={{{name!r}: {factor!r}}}: the factor must be finite "
                              "and non-zero")

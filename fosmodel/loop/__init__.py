@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     from .diagnose import Finding, least_squares_spectrum
     from .driver_forms import DriverForms, slow_driver
     from .effects import CandidateFamily, Effect, make
+    from .handoff import Handoff, hand_off, refit_on_all
     from .loop_report import evaluation_text, write_loop_report
     from .record import LoopRecord
     from .sessions import Session, SessionsResult, close_sessions, score_sessions
@@ -32,6 +33,7 @@ else:
         "diagnose": ("Finding", "least_squares_spectrum"),
         "driver_forms": ("DriverForms", "slow_driver"),
         "effects": ("CandidateFamily", "Effect", "make"),
+        "handoff": ("Handoff", "hand_off", "refit_on_all"),
         "loop_report": ("evaluation_text", "write_loop_report"),
         "record": ("LoopRecord",),
         "sessions": ("Session", "SessionsResult", "close_sessions", "score_sessions"),
@@ -39,8 +41,9 @@ else:
     })
 
 __all__ = [
-    "CandidateFamily", "DriverForms", "Effect", "Finding", "LoopConfig", "LoopRecord",
-    "LoopResult", "Session", "SessionsResult", "Step", "close_loop", "close_sessions",
-    "evaluation_text", "least_squares_spectrum", "make", "score_family", "score_sessions",
-    "slow_driver", "write_loop_report", "write_sessions_report",
+    "CandidateFamily", "DriverForms", "Effect", "Finding", "Handoff", "LoopConfig",
+    "LoopRecord", "LoopResult", "Session", "SessionsResult", "Step", "close_loop",
+    "close_sessions", "evaluation_text", "hand_off", "least_squares_spectrum", "make",
+    "refit_on_all", "score_family", "score_sessions", "slow_driver", "write_loop_report",
+    "write_sessions_report",
 ]

@@ -620,7 +620,8 @@ def allan(residual: np.ndarray, rate: float, alpha: float = ALPHA) -> Finding:
     """
     n = len(residual)
     m = np.unique(np.geomspace(1, max(1, n // 10), 40).astype(int))
-    taus, adev = allantools.oadev(residual, rate=rate, data_type="freq", taus=m / rate)[:2]
+    taus, adev = allantools.oadev(residual, rate=rate, data_type="freq",
+                                  taus=(m + 0.1) / rate)[:2]  # m back, truncated or rounded
     white = adev[0] * np.sqrt(taus[0] / taus)
     ratio2 = float((adev[-1] / white[-1]) ** 2)
     edf = float(allantools.edf_greenhall(alpha=0, d=2, m=int(round(taus[-1] * rate)), N=n,

@@ -136,12 +136,13 @@ def _frame(ax: Axes, name: str, also: list[float] | None = None) -> None:
     if log:
         set_lim(*_log_limits(low, high))
         return
-    if low == high:
+    if high - low <= 1e-9 * max(abs(low), abs(high)):  # one value, but for its last digits
         low, high = low - 1.0, high + 1.0
     ticks = ticker.MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]).tick_values(low, high)
-    first = max(t for t in ticks if t <= low)
-    last = min(t for t in ticks if t >= high)
-    kept = [t for t in ticks if first <= t <= last]
+    # The locator's ticks, computed in floating point, may fall a rounding short of the ends.
+    first = max((t for t in ticks if t <= low), default=low)
+    last = min((t for t in ticks if t >= high), default=high)
+    kept = [t for t in ticks if first <= t <= last] or [first, last]
     axis.set_major_locator(ticker.FixedLocator(kept))
     set_lim(first, last)
 

@@ -50,7 +50,7 @@ def effects_table(result: LoopResult) -> pd.DataFrame:
             **{f"Outage position error (m, {h} s)": v
                for h, v in m["outage_position_error_m"].items()},
             **{f"Outage MSE {h} s ({u})^2": v for h, v in m["outage_mse"].items()},
-            **{f"Bias RMS {t} s ({u})": v for t, v in m["bias_rms"].items()},
+            **{f"Free-run bias RMS {t} s ({u})": v for t, v in m["bias_rms"].items()},
             "Worse than the row above": ("" if s is result.before_scores
                                          else "; ".join(worse) or "nothing")})
         previous = s
@@ -289,14 +289,19 @@ def console_summary(result: LoopResult, width: int = CONSOLE_WIDTH) -> str:
     names = [_clip(name, _MODEL_WIDTH) for name in full]
     terms = ["-"] + [str(len(s.terms_added)) for s in result.steps]
     w = max(len(name) for name in names)
-    columns = ("MSE", f"Outage pos. err. {horizon} s" if horizon else "Outage pos. err.",
-               f"Bias RMS {last} s")
-    table = [f"row  {'Model':<{w}}  Terms" + "".join(f"  {c:>10}" for c in columns)]
+    # two-line heads, so that the table fits the width whole (a cut head or value misleads)
+    heads = (("", "MSE"), ("Outage pos.", f"err. {horizon} s" if horizon else "err."),
+             ("Free-run", f"bias RMS {last} s"))
+    widths = [max(10, *(len(h) for h in head)) for head in heads]
+    table = [f"{'':<5}{'':<{w}}  {'':>5}" + "".join(f"  {h[0]:>{n}}"
+                                                    for h, n in zip(heads, widths)),
+             f"row  {'Model':<{w}}  Terms" + "".join(f"  {h[1]:>{n}}"
+                                                   for h, n in zip(heads, widths))]
     for row, (name, count, m) in enumerate(zip(names, terms, metrics)):
         values = (m["mse"], m["outage_position_error_m"].get(horizon) if horizon else None,
                   m["bias_rms"][last])
         table.append(f"{row:>3}  {name:<{w}}  {count:>5}" + "".join(
-            f"  {_number(v):>{max(10, len(c))}}" for v, c in zip(values, columns)))
+            f"  {_number(v):>{n}}" for v, n in zip(values, widths)))
     notes = [f"row {row}: {name}" for row, name in enumerate(full) if name != names[row]]
     if result.steps:
         notes.append("final against starting model: "
@@ -310,8 +315,8 @@ def console_summary(result: LoopResult, width: int = CONSOLE_WIDTH) -> str:
                      + ", ".join(still_firing(result)))
     notes += [f"note: {note}" for note in result.notes]
     head = (f"prediction segment: MSE ({cfg.units or 'units'})^2, outage position error (m), "
-            f"bias RMS ({cfg.units or 'units'})")
-    return "\n".join([*textwrap.wrap(head, width), *(_clip(line, width) for line in table),
+            f"free-run bias RMS ({cfg.units or 'units'})")
+    return "\n".join([*textwrap.wrap(head, width), *(line.rstrip() for line in table),
                       *(line for note in notes
                         for line in textwrap.wrap(note, width, subsequent_indent="    "))])
 

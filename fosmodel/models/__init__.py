@@ -17,6 +17,7 @@ from .._lazy import attach
 
 if TYPE_CHECKING:
     from .baselines import ARModel, GaussMarkovModel
+    from .compensation import compensation_series
     from .levelar import LocalLevelAR
     from .model import FOSModel
     from .narx_features import NARXFeatures, lagged_rows
@@ -24,6 +25,7 @@ if TYPE_CHECKING:
 else:
     __getattr__, __dir__ = attach(__name__, {
         "baselines": ("ARModel", "GaussMarkovModel"),
+        "compensation": ("compensation_series",),
         "levelar": ("LocalLevelAR",),
         "model": ("FOSModel",),
         "narx_features": ("NARXFeatures", "lagged_rows"),
@@ -31,4 +33,4 @@ else:
     })
 
 __all__ = ["ARModel", "FOSModel", "FOSRegressor", "GaussMarkovModel", "LocalLevelAR",
-           "NARXFeatures", "lagged_rows"]
+           "NARXFeatures", "compensation_series", "lagged_rows"]

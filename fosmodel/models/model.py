@@ -58,6 +58,7 @@ from ..core.levels import (
     is_level,
     level_after,
     level_series,
+    levels_for,
     with_levels,
 )
 from ..core.validation import as_channels, as_signal, check_fitted
@@ -136,12 +137,14 @@ class FOSModel(BaseEstimator):
         name says how to compute it (``cos@7.3Hz``, ``step@120s``, ... see
         :mod:`fosmodel.core.derived`) need not be passed again: with ``rate`` set,
         the model rebuilds it from the record.
-    levels : list of float, optional
+    levels : list of float or "auto", optional
         Time constants in seconds of local levels ``level@<tau>s`` of the output
         to offer (the exponentially weighted mean of its past; see
         :mod:`fosmodel.core.levels` and :func:`fosmodel.core.levels.level_grid`).  They
-        need ``rate``.  They are computed from the output; ``exog`` may carry
-        them already (``level_series`` of the raw output, under their names,
+        need ``rate``.  ``"auto"`` (the CLI's ``--levels auto``) chooses them in :meth:`fit`
+        from the record's length and Allan floor (:func:`fosmodel.core.levels.levels_for`),
+        kept in ``levels_`` (and saved as the list).  They are computed from the output;
+        ``exog`` may carry them already (``level_series`` of the raw output, under their names,
         spot-checked) to save the work on a record used many times.
     rate : float, optional
         Sample rate in Hz (needed with ``levels``).
@@ -214,7 +217,7 @@ class FOSModel(BaseEstimator):
         degree: int = 1,
         exog_lags: dict[str, int] | None = None,
         columns: list[str] | None = None,
-        levels: list[float] | None = None,
+        levels: list[float] | str | None = None,
         rate: float | None = None,
         product_lags: int | None = None,
         max_terms: int | None = None,
@@ -253,9 +256,21 @@ class FOSModel(BaseEstimator):
             Parameters that do not make a candidate set (e.g. levels without a rate).
         """
         spec = CandidateSpec(self.max_lag, self.degree, self.exog_lags or {}, self.columns or (),
-                             levels=self.levels or (), product_lags=self.product_lags)
+                             levels=self._levels(), product_lags=self.product_lags)
         check_level_rate(spec.levels, self.rate)
         return spec
+
+    def _levels(self) -> tuple[float, ...] | list[float]:
+        """Return the level time constants: those given, or those ``"auto"`` chose in fit."""
+        if isinstance(self.levels, str):
+            if self.levels != "auto":
+                raise InputError("levels must be 'auto' or a list of time constants in seconds, "
+                                 f"got {self.levels!r}")
+            if not hasattr(self, "levels_"):
+                raise InputError("levels='auto' takes its time constants from the record: "
+                                 "they are chosen in fit()")
+            return self.levels_
+        return self.levels or ()
 
     def fit(
         self, y: ArrayLike, exog: Exog | None = None,
@@ -278,6 +293,9 @@ class FOSModel(BaseEstimator):
         -------
         self
         """
+        if isinstance(self.levels, str) and self.levels == "auto":
+            check_level_rate((1.0,), self.rate)
+            self.levels_ = list(levels_for(as_signal(y, "y"), float(self.rate or 0.0)))
         spec = self.candidate_spec()
         rule = StopRule(self.stop, self.tol, self.max_terms)
         if self.correlations not in ("fast", "reference"):
@@ -354,6 +372,17 @@ class FOSModel(BaseEstimator):
         plain = copy.copy(self)
         plain.compensation = None
         return plain
+
+    def without_compensation(self) -> FOSModel:
+        """Return the model fitted to what the compensation leaves, without the compensation.
+
+        Its terms and weights are this model's: it models ``y - c`` with ``c`` the
+        compensation series (:func:`fosmodel.models.compensation.compensation_series` of
+        :attr:`compensation`, :attr:`rate`).  A model without a compensation is returned as
+        a copy.
+        """
+        self._check_fitted()
+        return self._plain()
 
     def _thin(self) -> str | None:
         """Return a note when the fitting window holds few samples per weight, else None."""
@@ -947,7 +976,7 @@ class FOSModel(BaseEstimator):
             "format": FORMAT,
             "format_version": FORMAT_VERSION,
             "fosmodel_version": __version__,
-            "params": self.get_params(),
+            "params": {**self.get_params(), "levels": list(self._levels()) or None},
             "fitted": {
                 "terms": list(self.terms_),
                 "coef": [float(c) for c in self.coef_],

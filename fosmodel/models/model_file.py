@@ -114,7 +114,7 @@ def save_model(path: str | os.PathLike[str], model: SavedModel,
 def _parse(raw: bytes, where: str | os.PathLike[str]) -> object:
     """Parse the file's JSON within the limits on its nesting and its integers."""
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte-order mark, as a CSV's, is read past
     except UnicodeDecodeError:
         raise InputError(f"{where}: not a model file (not UTF-8 text)") from None
     try:

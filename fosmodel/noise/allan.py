@@ -196,8 +196,10 @@ def _oadev(y: np.ndarray, rate: float,
         Averaging times (s), deviations and the number of second differences of each.
     """
     if len(y) <= BLOCKED_SAMPLES:
+        # a tenth of a sample above each m: allantools truncates tau*rate (2019.9) or rounds
+        # it (2024), and either way gets m back, not m - 1 where m/rate*rate falls just short
         taus_s, adev, _, counts = allantools.oadev(y, rate=rate, data_type="freq",
-                                                   taus=ms / rate)
+                                                   taus=(ms + 0.1) / rate)
         return taus_s, adev, counts
     phase = allantools.frequency2phase(y, rate)  # allantools' phase, as oadev makes it
     ms = np.unique(ms)
@@ -310,26 +312,58 @@ def _identify(y: np.ndarray, m: int) -> int:
     return int(np.clip(alpha, -2, 2)) if np.isfinite(alpha) else 0
 
 
+#: A minimum with no significant rise beyond it is a floor when the curve runs on for this many
+#: times its tau without going lower; nearer the end it may still be falling.
+MIN_BEYOND = 4.0
+#: A read-off's slope must hold over this many decades of tau (a line, not a point's wiggle).
+READOFF_SPAN_DECADES = 0.5
+
+
 def readoff(result: AllanResult, slope_tol: float = 0.25) -> dict[str, float]:
     """Classic graphical read-offs of N, K and B from the Allan deviation curve.
 
-    ``N`` is the -1/2 line through the point whose local log-log slope is
-    closest to -1/2, read at tau = 1 s (``N/sqrt(tau)`` there is ``N``); ``K``
-    the +1/2 line through the point closest to +1/2, read at tau = 3 s
-    (``K sqrt(tau/3)`` there is ``K``); ``B`` the minimum deviation divided by
-    0.664 when the minimum is inside the curve.  NaN where no local slope is
-    within ``slope_tol`` of the nominal one (or the minimum is at an end).
+    ``N`` is the -1/2 line through the point whose log-log slope is closest to -1/2, read at
+    tau = 1 s (``N/sqrt(tau)`` there is ``N``); ``K`` the +1/2 line through the point closest
+    to +1/2, read at tau = 3 s (``K sqrt(tau/3)`` there is ``K``).  The slope is the
+    least-squares one over :data:`READOFF_SPAN_DECADES` of the curve centred on the point, so
+    that a wiggle of the noisy last taus is no +1/2 line.  ``B`` is the minimum deviation
+    divided by 0.664 where the minimum is a true one: the curve falls to it by more than an
+    earlier point's 68 % interval, and beyond it either rises by more than a later point's
+    interval or runs on for :data:`MIN_BEYOND` times its tau without going lower (a flat floor).
+    NaN where no slope is within ``slope_tol`` of the nominal one, or the curve has no true
+    minimum (it still falls at its last taus).
     """
     log_t, log_a = np.log10(result.taus), np.log10(result.adev)
-    slope = np.gradient(log_a, log_t)
+    slope = _span_slope(log_t, log_a, READOFF_SPAN_DECADES)
     out = {}
     for term, nominal, at in (("N", -0.5, 1.0), ("K", 0.5, 3.0)):
-        i = int(np.argmin(np.abs(slope - nominal)))
+        if not np.isfinite(slope).any():
+            out[term] = math.nan
+            continue
+        i = int(np.nanargmin(np.abs(slope - nominal)))
         line = 10 ** (log_a[i] + nominal * (math.log10(at) - log_t[i]))
         out[term] = line if abs(slope[i] - nominal) <= slope_tol else math.nan
     i = int(np.argmin(result.adev))
-    inside = 0 < i < len(result.adev) - 1
-    out["B"] = result.adev[i] / FLICKER_FLOOR if inside else math.nan
-    out["min_adev"] = float(result.adev[i]) if inside else math.nan
-    out["min_tau_s"] = float(result.taus[i]) if inside else math.nan
+    rises = bool(np.any(result.lower[i + 1:] > result.adev[i]))
+    floor = result.taus[-1] >= MIN_BEYOND * result.taus[i]
+    true = bool(np.any(result.lower[:i] > result.adev[i])) and (rises or floor)
+    out["B"] = result.adev[i] / FLICKER_FLOOR if true else math.nan
+    out["min_adev"] = float(result.adev[i]) if true else math.nan
+    out["min_tau_s"] = float(result.taus[i]) if true else math.nan
+    return out
+
+
+def _span_slope(log_t: np.ndarray, log_a: np.ndarray, span: float) -> np.ndarray:
+    """Return the least-squares log-log slope over ``span`` decades centred on each point.
+
+    NaN where the window reaches beyond the curve or holds fewer than three points.
+    """
+    out = np.full(log_t.shape, np.nan)
+    for i, centre in enumerate(log_t):
+        lo, hi = centre - span / 2, centre + span / 2
+        if lo < log_t[0] - 1e-9 or hi > log_t[-1] + 1e-9:
+            continue
+        w = (log_t >= lo - 1e-9) & (log_t <= hi + 1e-9)
+        if w.sum() >= 3:
+            out[i] = np.polyfit(log_t[w], log_a[w], 1)[0]
     return out

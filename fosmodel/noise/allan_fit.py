@@ -302,10 +302,14 @@ class NoiseFit:
 
         The datasheets' in-run bias stability read on the fit (the measured minimum stays in
         :attr:`readoff`); divided by 0.664 it is the bias instability by their convention.
+        ``(nan, nan)`` where the curve has no minimum inside the fitted taus (it still falls
+        at the last one, or rises from the first).
         """
         grid = np.geomspace(self.fitted_taus[0], self.fitted_taus[-1], 2000)
         curve = self.model_adev(grid)
         i = int(np.argmin(curve))
+        if not 0 < i < len(grid) - 1:
+            return math.nan, math.nan
         return float(curve[i]), float(grid[i])
 
     def fitted_terms(self) -> list[str]:
@@ -427,7 +431,9 @@ class NoiseFit:
         notes.append(f"On the fitted curve ({' + '.join(self.fitted_terms())}): in-run bias "
                      f"stability (its minimum) {self._both('B', minimum)} at tau = {at:.3g} "
                      f"s; bias instability (minimum / 0.664) "
-                     f"{self._both('B', minimum / FLICKER_FLOOR)}.")
+                     f"{self._both('B', minimum / FLICKER_FLOOR)}." if math.isfinite(minimum)
+                     else f"On the fitted curve ({' + '.join(self.fitted_terms())}): no "
+                     "minimum within the fitted taus, so no in-run bias stability.")
         misses = self.misses()
         if misses:
             worst = max(misses, key=lambda m: abs(math.log(m[1])))
@@ -478,7 +484,8 @@ class NoiseFit:
             "K read-off (3 s)": self._nav_text("K", read.get("K", math.nan)),
             "GM fitted (sigma, Tc)": gm,
             "fit: in-run bias stability (min)": (f"{self._nav_text('B', fit_min)} at "
-                                                 f"{fit_at:.3g} s"),
+                                                 f"{fit_at:.3g} s" if math.isfinite(fit_min)
+                                                 else "-"),
             "fit: B (min/0.664)": self._nav_text("B", fit_min / FLICKER_FLOOR),
             "terms fitted": " ".join(k for k in self.terms if self.coefficients[k] > 0),
         }
@@ -521,8 +528,9 @@ class NoiseFit:
             "datasheet": {"in_run_bias_stability": _finite(self.readoff.get("min_adev",
                                                                             math.nan)),
                           "tau_s": _finite(self.readoff.get("min_tau_s", math.nan)),
-                          "fit_in_run_bias_stability": fit_min, "fit_tau_s": fit_at,
-                          "fit_bias_instability": fit_min / FLICKER_FLOOR,
+                          "fit_in_run_bias_stability": _finite(fit_min),
+                          "fit_tau_s": _finite(fit_at),
+                          "fit_bias_instability": _finite(fit_min / FLICKER_FLOOR),
                           "convention": "in-run bias stability = the minimum of the Allan "
                                         "deviation (measured, and of the fitted curve); bias "
                                         "instability = that minimum / 0.664"},

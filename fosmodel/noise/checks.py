@@ -16,7 +16,11 @@ units moves every coefficient by as much.  Before the analysis:
   record's, by more than :data:`NOISE_SIGMAS` times the noise of a window's median (the
   sample noise from the record's own first differences) and more than a floor
   (:data:`GYRO_FLOOR`, :data:`ACCEL_FLOOR`: the drift of a static low-cost sensor stays below
-  them).  Medians, not means: a lone spike is an outlier, not motion.
+  them).  Medians, not means: a lone spike is an outlier, not motion.  A window holds at
+  least :data:`MIN_WINDOW` samples (10 s at 1 Hz); at such a low rate the minute around a
+  window is at least :data:`MIN_NEIGHBOURS` windows, and the noise of a gyro window's median
+  is also read off the medians themselves (neighbouring samples wander together).  A record
+  shorter than two windows is left to the analyses' own length checks.
   :func:`static_part` refuses a record that moves, or with ``static_only`` keeps its longest
   static stretch.
 - :func:`unused_columns` names every column of a record that is not analysed, and why.
@@ -49,8 +53,15 @@ MIN_WINDOW = 10
 #: Fewest windows in a static stretch worth analysing (besides the Allan deviation's
 #: :data:`~fosmodel.noise.allan.MIN_SAMPLES`).
 MIN_STRETCH_WINDOWS = 10
-#: Windows whose median a gyro window is held against (a minute around it).
-NEIGHBOURS = 61
+#: A gyro window is held against the median of the windows in the minute around it, and of
+#: no fewer than :data:`MIN_NEIGHBOURS` windows (at a low rate a window is longer than 1 s).
+NEIGHBOURS_S = 60.0
+MIN_NEIGHBOURS = 7
+#: At a rate where a window holds more than 1 s (under :data:`MIN_WINDOW` Hz), and from this
+#: many windows, the noise of a gyro window's median is also read off the medians themselves:
+#: there neighbouring samples are correlated (a wander of the bias spans several), and the
+#: sample noise alone would make a static record's medians look like motion.
+MIN_SPREAD_WINDOWS = 20
 #: A window moves beyond this many standard deviations of its median's noise...
 NOISE_SIGMAS = 8.0
 #: ...and beyond these floors: 0.5 deg/s of rotation, 0.03 g of specific force (a tilt of 1.7
@@ -174,7 +185,8 @@ class Stillness:
             parts.append(f"its specific force by up to {self.force / STANDARD_GRAVITY:.3g} g")
         first = int(np.argmin(self.still)) * self.window / self.rate
         return (f"it moves for {self.moving_s:.3g} s of its {self.n_samples / self.rate:.4g} s "
-                f"(first at {first:.3g} s), where {' and '.join(parts)} (1 s medians)")
+                f"(first at {first:.3g} s), where {' and '.join(parts)} "
+                f"({self.window / self.rate:.3g} s medians)")
 
 
 def stillness(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: float) -> Stillness:
@@ -195,17 +207,24 @@ def stillness(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: flo
     """
     n = len(columns[axes[0].column])
     window = max(int(round(WINDOW_S * rate)), MIN_WINDOW)
-    count = max(n // window, 1)
-    still = np.ones(count, dtype=bool)
     found = {"gyro": math.nan, "accel": math.nan}
+    if n < 2 * window:  # no window to hold against another: the length checks speak
+        return Stillness(np.ones(1, dtype=bool), max(n, 1), n, float(rate), math.nan,
+                         math.nan)
+    count = n // window
+    neighbours = max(2 * int(round(NEIGHBOURS_S / (window / rate) / 2)) + 1, MIN_NEIGHBOURS)
+    still = np.ones(count, dtype=bool)
     for sensor in ("gyro", "accel"):
         mine = [a for a in axes if a.sensor == sensor]
         if not mine:
             continue
         x = np.column_stack([columns[a.column] * to_si_scale(sensor, a.units) for a in mine])
         medians, noise = _window_medians(x, window, count)
+        if sensor == "gyro" and window > WINDOW_S * rate and count >= MIN_SPREAD_WINDOWS:
+            noise = np.maximum(noise, _median_spread(medians))  # a low rate's correlated samples
         if sensor == "gyro":  # against the minute around it: a drifting bias is not a turn
-            off = np.abs(medians - median_filter(medians, size=(NEIGHBOURS, 1), mode="nearest"))
+            off = np.abs(medians - median_filter(medians, size=(neighbours, 1),
+                                                          mode="nearest"))
             limit = np.maximum(NOISE_SIGMAS * noise, GYRO_FLOOR)
             moving = np.any(off > limit, axis=1)
             found[sensor] = float(off.max())
@@ -230,6 +249,12 @@ def _window_medians(x: np.ndarray, window: int, count: int) -> tuple[np.ndarray,
     d = np.diff(x, axis=0)
     sample = 1.4826 * np.median(np.abs(d - np.median(d, axis=0)), axis=0) / math.sqrt(2.0)
     return medians, _MEDIAN_EFFICIENCY * sample / math.sqrt(window)
+
+
+def _median_spread(medians: np.ndarray) -> np.ndarray:
+    """Return the noise of a window's median read off the medians (1.4826 MAD of their steps)."""
+    dm = np.diff(medians, axis=0)
+    return 1.4826 * np.median(np.abs(dm - np.median(dm, axis=0)), axis=0) / math.sqrt(2.0)
 
 
 def static_part(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: float,

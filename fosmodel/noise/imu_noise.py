@@ -65,11 +65,20 @@ from ..io.output import path_name, save_figure, write_tables, write_text
 from ..typeset.latex import mathtext_units
 from ..typeset.summary import Summary
 from .allan import FLICKER_FLOOR, AllanResult, allan_deviation
-from .allan_fit import NoiseFit, fit_noise
+from .allan_fit import GAUSS_MARKOV, NoiseFit, fit_noise
 from .allan_report import write_allan
 from .axes import SENSORS, Axis
-from .exports import Density, NoiseExport, export_files, exports_dict, kalibr_yaml
-from .metrics import to_si_scale
+from .checks import GRAVITY_TOLERANCE
+from .exports import (
+    GM_WHITE_MAX_TC_S,
+    Density,
+    NoiseExport,
+    clamp_notes,
+    export_files,
+    exports_dict,
+    kalibr_yaml,
+)
+from .metrics import STANDARD_GRAVITY, to_si_scale
 
 #: Exported terms: white noise, bias instability, rate random walk.
 EXPORTED = ("N", "B", "K")
@@ -100,6 +109,29 @@ class AxisNoise:
         """Return a term's exported value (:meth:`value`) in SI: rad/s or m/s^2 based."""
         return self.value(term)[0] * to_si_scale(self.axis.sensor, self.axis.units)
 
+    def gm_white_si(self) -> float:
+        """Return the white-like part of a short Gauss-Markov term in SI, 0 if there is none.
+
+        A first-order Gauss-Markov term of standard deviation ``G`` and correlation time ``Tc``
+        has the rate spectrum ``2 G^2 Tc / (1 + (2 pi f Tc)^2)``: white at ``2 G^2 Tc`` below
+        ``1/(2 pi Tc)``, and its Allan variance tends to ``2 G^2 Tc / tau`` beyond ``Tc``, as
+        white noise of density ``G sqrt(2 Tc)`` would.  Where ``Tc`` is at most
+        :data:`~fosmodel.noise.exports.GM_WHITE_MAX_TC_S`, a filter with no state for it sees
+        that much more white noise than ``N``.
+        """
+        tc = self.fit.gm_tc
+        if GAUSS_MARKOV not in self.fit.terms or tc is None or tc > GM_WHITE_MAX_TC_S:
+            return 0.0
+        return (self.fit.coefficients[GAUSS_MARKOV] * math.sqrt(2.0 * tc)
+                * to_si_scale(self.axis.sensor, self.axis.units))
+
+    def filter_white_si(self) -> float:
+        """Return the white noise a filter needs in SI: ``sqrt(N^2 + 2 G^2 Tc)``.
+
+        ``G sqrt(2 Tc)`` is :meth:`gm_white_si`, 0 without a short Gauss-Markov term.
+        """
+        return math.hypot(self.si("N"), self.gm_white_si())
+
 
 @dataclass(frozen=True)
 class ImuNoise:
@@ -108,6 +140,7 @@ class ImuNoise:
     axes: tuple[AxisNoise, ...]
     rate: float
     source: str
+    gravity: float | None = None
 
     def of(self, sensor: str) -> list[AxisNoise]:
         """Return the axes of one sensor type, in the order given."""
@@ -140,17 +173,53 @@ class ImuNoise:
         if missing:
             raise InputError(f"each VIO and autopilot export needs gyro and accelerometer axes; "
                              f"there is no {' and no '.join(missing)} column")
-        densities = {}
+        densities: dict[tuple[str, str], Density] = {}
         for sensor in SENSORS:
             for term in ("N", "K"):
-                top = self.worst(sensor, term)
-                if top is None:
+                if self.worst(sensor, term) is None:
                     raise InputError(f"the exports need the {sensor} {_TERM_NAMES[term]} "
                                      f"(Allan {term}); no {sensor} axis has it fitted")
-                value, axis = top
-                densities[sensor, term] = Density(value, axis.axis.column, axis.value(term)[1])
+                if term == "N":  # with a short Gauss-Markov term's white-like part
+                    axes = [a for a in self.of(sensor) if math.isfinite(a.filter_white_si())]
+                    top = max(axes, key=lambda a: a.filter_white_si())
+                    densities[sensor, term] = Density(
+                        top.filter_white_si(), top.axis.column, top.value(term)[1],
+                        top.gm_white_si(), top.fit.gm_tc if top.gm_white_si() > 0 else None)
+                else:
+                    value, axis = self.worst(sensor, term)  # type: ignore[misc]
+                    densities[sensor, term] = Density(value, axis.axis.column,
+                                                      axis.value(term)[1])
+        gravity, told = ((self.gravity, "the record's mean specific force at rest")
+                         if self.gravity is not None else (STANDARD_GRAVITY, "standard gravity"))
         return NoiseExport(densities, self.rate, Path(self.source).name,
-                           tuple(a.axis.column for a in self.axes), float(inflate))
+                           tuple(a.axis.column for a in self.axes), float(inflate),
+                           gravity, told)
+
+    def fit_warnings(self) -> list[str]:
+        """Say, one sentence per axis, where the Allan fit misses the measured deviation.
+
+        Beyond the deviation's 95 % interval and by more than the allowed factor
+        (:meth:`fosmodel.noise.allan_fit.NoiseFit.misses`); empty when every fit holds.
+        """
+        out = []
+        for a in self.axes:
+            misses = a.fit.misses()
+            if misses:
+                tau, ratio = misses[0]
+                out.append(f"{a.axis.column}: the IEEE Std 952 fit misses the measured Allan "
+                           f"deviation beyond its 95 % interval at {len(misses)} averaging "
+                           f"time(s) (fit/data {ratio:.2f} at tau = {tau:.3g} s first); see "
+                           "its figure's lower panel")
+        return out
+
+    def export_notes(self, inflate: float = 1.0) -> list[str]:
+        """Say what the console should about the exports: each value clamped to its range.
+
+        Empty without gyro and accelerometer axes (there are no exports then).
+        """
+        if not all(self.of(s) for s in SENSORS):
+            return []
+        return clamp_notes(self.export(inflate))
 
     def table(self) -> pd.DataFrame:
         """Tabulate N, B, K of each axis beside the classic read-offs, in navigation units.
@@ -180,11 +249,7 @@ class ImuNoise:
                  "N at tau = 1 s on the -1/2 line, K at 3 s on the +1/2 line, B = minimum / "
                  "0.664 (read-offs); in-run bias stability = the minimum of the deviation "
                  "(datasheet convention). '<' marks an upper limit (term not resolved)."]
-        for a in self.axes:
-            misses = a.fit.misses()
-            if misses:
-                notes.append(f"WARNING: {a.axis.column}: the fit misses the measured deviation "
-                             f"beyond its 95 % interval at {len(misses)} averaging time(s).")
+        notes += [f"WARNING: {line}." for line in self.fit_warnings()]
         return Summary("Allan noise parameters per axis (IEEE Std 952)", info, self.table(),
                        notes)
 
@@ -264,7 +329,8 @@ class ImuNoise:
             sheet = [inflate * a.fit.bias_stability()[0] / FLICKER_FLOOR
                      * to_si_scale(sensor, a.axis.units) for a in axes]
             lines.append("%   datasheet bias instability (fit minimum / 0.664): "
-                         + " ".join(f"{v:.6e}" for v in sheet))
+                         + " ".join(f"{v:.6e}" if math.isfinite(v) else "none (no minimum)"
+                                    for v in sheet))
             pairs = []
             for term, prop in (("N", "NoiseDensity"), ("B", "BiasInstability"),
                                ("K", "RandomWalk")):
@@ -365,7 +431,21 @@ def imu_noise(columns: Mapping[str, np.ndarray], axes: Sequence[Axis], rate: flo
         result = allan_deviation(columns[axis.column], rate, units=axis.units,
                                  sensor=axis.sensor)
         fitted.append(AxisNoise(axis, result, fit_noise(result, min_tau=min_tau)))
-    return ImuNoise(tuple(fitted), float(rate), source)
+    return ImuNoise(tuple(fitted), float(rate), source, _gravity(columns, axes))
+
+
+def _gravity(columns: Mapping[str, np.ndarray], axes: Sequence[Axis]) -> float | None:
+    """Return the magnitude of the accelerometer triad's mean in m/s^2 if it reads gravity.
+
+    None without three accelerometer axes, or when the mean is not within
+    :data:`~fosmodel.noise.checks.GRAVITY_TOLERANCE` of 1 g (gravity removed, or not at rest).
+    """
+    accels = [a for a in axes if a.sensor == "accel"]
+    if len(accels) != 3:
+        return None
+    mean = [float(np.mean(columns[a.column])) * to_si_scale("accel", a.units) for a in accels]
+    g = math.hypot(*mean)
+    return g if abs(g / STANDARD_GRAVITY - 1.0) <= GRAVITY_TOLERANCE else None
 
 
 def write_imu_noise(noise: ImuNoise, out_dir: Path, title: str,

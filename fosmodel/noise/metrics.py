@@ -170,8 +170,8 @@ def metric_definitions(units: str | None, horizon_s: float, n_starts: int, predi
     -------
     dict
         A sentence per metric: ``mse``, ``evaluate_mse``, ``position_error_m`` (the FOS
-        paper's equivalent position error), ``outage_mse``, ``outage_position_error_m`` and
-        ``bias_rms``.
+        paper's equivalent position error), ``outage_mse``, ``outage_position_error_m``,
+        ``bias_rms`` (of the one-step residual) and ``free_run_bias_rms`` (of the free runs).
     """
     u = units or "units"
     return {
@@ -196,9 +196,13 @@ def metric_definitions(units: str | None, horizon_s: float, n_starts: int, predi
                                    "(an accelerometer's twice; a gyroscope's once into a tilt, "
                                    "times g = 9.81 m/s^2, then twice); the RMS over the outages "
                                    "of the position error at their ends.",
-        "bias_rms": f"Bias RMS tau s ({u}): the RMS of the means of the one-step residual over "
-                    f"consecutive tau-second windows of {predict}: the slow error a filter "
-                    "sees as a bias.",
+        "bias_rms": f"One-step bias RMS tau s ({u}): the RMS of the means of the one-step "
+                    f"residual over consecutive tau-second windows of {predict}: the slow "
+                    "error a filter sees as a bias.",
+        "free_run_bias_rms": f"Free-run bias RMS tau s ({u}): the RMS over the outages of "
+                             f"tau s spread evenly over {predict} of the mean error of the "
+                             "model's free run from the true past: the bias left to a filter "
+                             "that integrates the model unaided.",
     }
 
 

@@ -32,7 +32,8 @@ def _headers(result: StudyResult) -> dict[str, str]:
         "position_error_m": "Position error (m)", "outage_mse": f"Outage MSE ({u})^2",
         "outage_position_error_m": f"Outage position error (m, {result.config.horizon_s:g} s)",
     }
-    cols.update({f"bias_rms_{t:g}s": f"Bias RMS {t:g} s ({u})" for t in result.config.taus})
+    cols.update({f"bias_rms_{t:g}s": f"One-step bias RMS {t:g} s ({u})"
+                 for t in result.config.taus})
     cols.update(runtime_s="Fit time (s)", n_terms="Terms")
     return cols
 

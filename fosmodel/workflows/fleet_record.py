@@ -27,6 +27,7 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from ..filter.joint_noise import joint_noise
+from ..io.content import settle
 from ..io.formats import SUFFIXES
 from ..io.loader import load_record
 from ..io.output import report_directory
@@ -119,8 +120,9 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
     name = record_name(path)
     folder = Path(store) / name
     with threadpool_limits(limits=1, user_api="blas"):  # the same bits in any process
-        rec = load_record(Path(path), **config.load)  # every column: the temperature too
+        rec = load_record(Path(path), **config.load, hold=True)  # every column: its temperature
         axes, aux = record_axes(rec, config.columns, config.units, config.temperature)
+        rec = settle(rec, [*(a.column for a in axes), *aux])  # the others noted, left out
         rec, stretch = check_record(rec, axes, config.static_only)
         aux = {name: rec.column(name) for name in aux}  # the static stretch's, if one was kept
         skipped = unused_columns(rec.names, [*(a.column for a in axes), *aux],

@@ -443,14 +443,23 @@ def _brief(step: str, outcome: StudyResult | LoopResult) -> str:
     return f"{len(kept)} effect(s) kept"
 
 
-def _best(rows: pd.DataFrame, fos: bool) -> pd.Series | None:
-    """Return the row with the lowest evaluation MSE among FOS's forms or the baselines'.
+def _best(rows: pd.DataFrame, fos: bool) -> tuple[pd.Series | None, str]:
+    """Return the stable row with the lowest evaluation MSE among FOS's forms or the baselines'.
 
-    None when the study ran none of them (``methods`` without FOS, or FOS alone).
+    An unstable model (its free runs diverge, their errors NaN) is never the best, however low
+    its one-step error.  With no row, ``(None, "not studied")`` (``methods`` without FOS, or
+    FOS alone); with no stable one, ``(None, "none stable")``.
     """
     is_fos = rows["method"].str.startswith("fos")
     pick = rows[is_fos if fos else ~is_fos]
-    return None if pick.empty else pick.loc[pick["evaluate_mse"].idxmin()]
+    if pick.empty:
+        return None, "not studied"
+    if "stable" in pick:
+        pick = pick[pick["stable"].astype(bool)]
+    if pick.empty:
+        return None, "none stable"
+    row = pick.loc[pick["evaluate_mse"].idxmin()]
+    return row, f"{row['label']} L={row['order']}"
 
 
 def study_row(axis: Axis, study: StudyResult) -> dict[str, Any]:
@@ -461,13 +470,13 @@ def study_row(axis: Axis, study: StudyResult) -> dict[str, Any]:
     """
     rows = study.rows[study.rows["protocol"] == "fair"] if "fair" in \
         study.config.protocols else study.rows
-    fos, base = _best(rows, True), _best(rows, False)
+    (fos, fos_name), (base, base_name) = _best(rows, True), _best(rows, False)
     outage, bias = study_columns(study.config.horizon_s)
     return {"axis": axis.column, "units": axis.units,
-            "FOS": _chosen(fos),
+            "FOS": fos_name,
             f"FOS {outage}": _value(fos, "outage_position_error_m"),
             f"FOS {bias}": _value(fos, "bias_rms_30s"),
-            "best baseline": _chosen(base),
+            "best baseline": base_name,
             f"baseline {outage}": _value(base, "outage_position_error_m"),
             f"baseline {bias}": _value(base, "bias_rms_30s"),
             "FOS / baseline (outage)": _value(fos, "outage_position_error_m")
@@ -479,11 +488,7 @@ def study_columns(horizon_s: float) -> tuple[str, str]:
 
     They end each table's FOS and baseline heads; the outage horizon is the study's.
     """
-    return f"outage error (m, {horizon_s:g} s)", "bias RMS 30 s"
-
-
-def _chosen(row: pd.Series | None) -> str:
-    return "not studied" if row is None else f"{row['label']} L={row['order']}"
+    return f"outage error (m, {horizon_s:g} s)", "one-step bias RMS 30 s"
 
 
 def _value(row: pd.Series | None, key: str) -> float:
@@ -503,8 +508,8 @@ def loop_row(axis: Axis, loop: LoopResult) -> dict[str, Any]:
             # NaN where the prediction segment holds too few 30 s windows to report them
             "30 s outage error before (m)": _number(before["outage_position_error_m"].get("30")),
             "30 s outage error after (m)": _number(after["outage_position_error_m"].get("30")),
-            "30 s bias RMS before": _number(before["bias_rms"].get("30")),
-            "30 s bias RMS after": _number(after["bias_rms"].get("30")),
+            "30 s free-run bias RMS before": _number(before["bias_rms"].get("30")),
+            "30 s free-run bias RMS after": _number(after["bias_rms"].get("30")),
             "cross-axis noise (largest)": "none" if strongest is None else
             f"{strongest['channel']} {strongest['rho']:+.3f}",
             "still firing": ", ".join(loop.unexplained) or "none",

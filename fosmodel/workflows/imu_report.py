@@ -15,6 +15,9 @@ Layout of the report directory::
     models/AXIS.json     each axis's FOS error model (``fosmodel predict`` reads it)
     filter/allan_model.json   the axes' Allan error models as one state-space shaping filter
     filter/joint_model.json   the same with the axes' correlations in its driving noise
+    filter/AXIS/         each axis's loop final model (refitted on all the data) and Allan
+                         model as filter JSON (:mod:`fosmodel.filter.filter_file`), which
+                         the aided position filter recommends in the page
 """
 
 from __future__ import annotations
@@ -31,7 +34,9 @@ from ..core.parallel import in_workers
 from ..io.model_file import write_model
 from ..io.output import path_name, write_tables, write_text
 from ..loop.closeloop import LoopResult
+from ..loop.handoff import Handoff, hand_off
 from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
+from ..noise.allan_fit import NoiseFit
 from ..noise.axes import Axis
 from ..noise.imu_noise import ImuNoise, write_imu_noise
 from ..noise.metrics import metric_definitions, segment_text
@@ -41,7 +46,39 @@ from ..typeset.markdown import markdown_table
 from .imu import AxisResult, ImuResult, study_columns
 
 
-def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]:
+def axis_handoffs(result: ImuResult, columns: Mapping[str, np.ndarray],
+                  aux: Mapping[str, np.ndarray] | None = None) -> dict[str, Handoff]:
+    """Hand each axis's loop final model to a filter (:func:`fosmodel.loop.handoff.hand_off`).
+
+    Parameters
+    ----------
+    result : ImuResult
+    columns : mapping of str to ndarray
+        The record's axes by column (those :func:`~fosmodel.workflows.imu.run_imu` read).
+    aux : mapping of str to ndarray, optional
+        The auxiliary channels the loops read (a temperature).
+
+    Returns
+    -------
+    dict of str to Handoff
+        By axis column, each with the axis's Allan fit of the whole record.
+    """
+    channels = {**{a.axis.column: columns[a.axis.column] for a in result.axes}, **(aux or {})}
+    fits = {a.axis.column: a.fit for a in result.noise.axes}
+    calls = [(_handoff, (a, channels, fits.get(a.axis.column))) for a in result.axes]
+    found = in_workers(calls, result.config.n_jobs)
+    return {a.axis.column: h for a, h in zip(result.axes, found)}
+
+
+def _handoff(a: AxisResult, channels: Mapping[str, np.ndarray],
+             fit: NoiseFit | None) -> Handoff:
+    others = {k: v for k, v in channels.items() if k != a.axis.column}
+    return hand_off(a.loop, channels[a.axis.column], others, sensor=a.axis.sensor,
+                    units=a.axis.units, allan=fit, column=a.axis.column)
+
+
+def write_imu_report(result: ImuResult, out_dir: Path, title: str,
+                     handoffs: Mapping[str, Handoff] | None = None) -> list[Path]:
     """Write the whole report of :func:`fosmodel.workflows.imu.run_imu` into ``out_dir``.
 
     Parameters
@@ -51,6 +88,9 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
         An existing directory (the command publishes it atomically).
     title : str
         The report's title.
+    handoffs : mapping of str to Handoff, optional
+        Each axis's filter models (:func:`axis_handoffs`), written under ``filter/AXIS/``
+        with a section of the page.
 
     Returns
     -------
@@ -68,10 +108,44 @@ def write_imu_report(result: ImuResult, out_dir: Path, title: str) -> list[Path]
         write_text(out_dir / "filter" / "joint_model.json",
                    json.dumps({"source": result.source, **result.joint.to_dict()}, indent=1)
                    + "\n")
+    axis_files = [p for column, h in (handoffs or {}).items()
+                  for p in h.write(out_dir / "filter" / path_name(column),
+                                   {"source": result.source, "column": column})]
     report = out_dir / "report.md"
-    write_text(report, _page(result, title, tables, models))
+    write_text(report, _page(result, title, tables, models)
+               + (_handoff_section(handoffs) if handoffs else ""))
     joint = [out_dir / "filter" / "joint_model.json"] if result.joint is not None else []
-    return [*paths, *(p for p, _ in models), filter_path, *joint, report]
+    return [*paths, *(p for p, _ in models), filter_path, *joint, *axis_files, report]
+
+
+def _handoff_section(handoffs: Mapping[str, Handoff]) -> str:
+    """Return the page's section on each axis's filter models and the one recommended."""
+    rows = []
+    for column, h in handoffs.items():
+        loop, allan = h.scores.get("loop final model"), h.scores.get("Allan model")
+        rows.append({"axis": column, "recommended": h.recommended or "none",
+                     "loop RMS [m]": loop.rms_m if loop else np.nan,
+                     "loop sigma / RMS": loop.ratio if loop else np.nan,
+                     "Allan RMS [m]": allan.rms_m if allan else np.nan,
+                     "Allan sigma / RMS": allan.ratio if allan else np.nan})
+    first = next(iter(handoffs.values()))
+    cycle = next((h.cycle_s for h in handoffs.values() if h.cycle_s), None)
+    lines = ["", "## Filter models per axis", "",
+             "Each axis's loop final model and Allan model as filter JSON in "
+             "`filter/AXIS/loop_model.json` and `filter/AXIS/allan_model.json` (see the docs' "
+             "Kalman page, \"The filter JSON\"). The final model's structure was chosen on "
+             "the loop's segments and its terms' weights refitted on all the data "
+             f"({first.n_samples} samples; a compensation's weights stay those of the loop's "
+             "fitting segment); the Allan model is the fit of the whole record. "
+             "Each model was judged in the 1-D aided position filter (the tilt error model for "
+             "a gyro), fitted on the first half of the record and run on the second, with "
+             "position updates of 0.1 m"
+             + (f" in {cycle:g} s / {cycle:g} s update/prediction cycles" if cycle else "")
+             + "; the recommended one has the lowest RMS position error among those whose "
+             "filter claims at least 0.7 of its actual error (sigma / RMS).", "",
+             markdown_table(pd.DataFrame(rows), digits=4), ""]
+    lines += [f"- {column}: {h.why}" for column, h in handoffs.items()]
+    return "\n".join(lines) + "\n"
 
 
 def write_imu_tables(result: ImuResult, out_dir: Path,
@@ -90,11 +164,12 @@ def write_imu_tables(result: ImuResult, out_dir: Path,
         "study": (result.study_table(), f"{title}: best FOS and best baseline of each axis "
                   f"(chosen on the evaluation segment), errors on {study}: outage error, the "
                   f"RMS position error at the end of {cfg.n_starts} free runs of "
-                  f"{cfg.horizon_s:g} s; bias RMS, the RMS of the one-step residual's 30 s "
-                  "means (in the axis's units)"),
+                  f"{cfg.horizon_s:g} s; one-step bias RMS, the RMS of the one-step residual's "
+                  "30 s means (in the axis's units)"),
         "loop": (result.loop_table(), f"{title}: the residual loop of each axis, errors on "
                  f"{loop} before and after the effects kept (outage error: at the end of "
-                 f"{cfg.horizon_s:g} s free runs; bias RMS in the axis's units)"),
+                 f"{cfg.horizon_s:g} s free runs; free-run bias RMS, the RMS of their 30 s mean "
+                 "errors, in the axis's units)"),
         "timing": (result.timing_table(), f"{title}: run time of each step"),
     }
     for stem, (frame, caption) in tables.items():
@@ -172,9 +247,10 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
     sections = [
         ("Noise parameters (Allan variance)", "noise",
          "IEEE Std 952 terms fitted to each axis's overlapping Allan deviation; exports for "
-         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/openvins_kalibr_imu_chain.yaml`), "
+         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/kalibr_imu_chain.yaml`), "
          "VINS-Mono/Fusion (`noise/vins_imu.yaml`), ORB-SLAM3 (`noise/orbslam3_imu.yaml`), "
-         "PX4 EKF2 (`noise/px4_ekf2.params`), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
+         "PX4 EKF2 (`noise/px4_ekf2.params` for QGroundControl, `noise/px4_ekf2_console.txt` "
+         "for the console), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
          "MATLAB (`noise/imu_params.m`) and JSON (`noise/imu_noise.json`)"
          + (f", inflated {result.config.inflate:g}x for a moving platform" if
             result.config.inflate != 1.0 else "")
@@ -192,10 +268,12 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
         frame, caption = tables[stem]
         lines += [f"## {heading}", "", text, "", f"Table: {caption}.", "",
                   markdown_table(frame, digits=4), ""]
-        if stem != "noise":
+        if stem == "noise":
+            lines += _noise_warnings(result.noise)
+        else:
             lines += [*_definitions(result, stem), ""]
         if stem == "loop":
-            lines += _loop_warnings(result)
+            lines += [*driver_notes(result), *_loop_warnings(result)]
     lines += ["## Error models for a filter", "",
               "- `filter/allan_model.json`: every axis's Allan error model (white noise, a "
               "first-order Gauss-Markov bias instability, a random-walk bias) as one "
@@ -230,8 +308,9 @@ def _definitions(result: ImuResult, stem: str) -> list[str]:
                                  study if stem == "study" else loop)
     same = (" (the study's: both steps score on one segment)" if study == loop
             else f" (not the study's {study.removeprefix('the ')})")
+    bias = defined["free_run_bias_rms" if stem == "loop" else "bias_rms"]
     lines = [f"- {defined['outage_position_error_m']}",
-             f"- {defined['bias_rms'].replace('(units)', '(the axis units)')}"]
+             f"- {bias.replace('(units)', '(the axis units)')}"]
     if stem == "loop":
         lines.insert(0, f"- Errors on {loop}{same}, of the loop's starting model (before) and "
                         "final model (after).")
@@ -239,6 +318,30 @@ def _definitions(result: ImuResult, stem: str) -> list[str]:
         lines.append("- FOS / baseline (outage): the first outage error over the second; below "
                      "1, FOS does better.")
     return ["What the columns are:", "", *lines]
+
+
+def _noise_warnings(noise: ImuNoise) -> list[str]:
+    """Warn, one line per axis, where the Allan fit misses the measured deviation."""
+    lines = [f"- WARNING: {line} (`noise/axes/{path_name(line.split(':')[0])}/`)."
+             for line in noise.fit_warnings()]
+    return [*lines, ""] if lines else []
+
+
+def driver_notes(result: ImuResult) -> list[str]:
+    """Say which auxiliary channels served as the loops' drivers, and which axes kept them.
+
+    A channel such as ``temp_c`` is offered to every axis's loop as a measured cause (its slow
+    and fast parts), never analysed as an axis of its own; its own excursions (a warm-up) are
+    the driver's signal, not outliers of an axis.
+    """
+    out = []
+    for name in result.aux:
+        using = [a.axis.column for a in result.axes
+                 if any(name in s.effect.describe() for s in a.loop.steps)]
+        out.append(f"{name} served as a driver: each axis's loop was offered it as a measured "
+                   "cause (its slow and fast parts), judged on data the model was not fitted "
+                   "on; " + (f"kept on {', '.join(using)}." if using else "kept on no axis."))
+    return [*out, ""] if out else []
 
 
 def _loop_warnings(result: ImuResult) -> list[str]:
