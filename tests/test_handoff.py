@@ -88,11 +88,22 @@ def test_without_units_nothing_is_judged_and_the_report_says_why(driven):
 
 
 def test_a_nonlinear_final_model_is_written_for_an_ekf_and_not_judged(tmp_path):
+    import dataclasses
+
+    from fosmodel import FOSModel
+    from fosmodel.models.bound import BoundModel
+
     rec = make_scenario("undeclared_nonlinear", seed=0)
     y = rec.columns[rec.target]
     channels = {k: v for k, v in rec.columns.items() if k != rec.target}
     units = rec.truth["units"]
     result = close_loop(y, channels, LoopConfig(rate=rec.rate, sensor="gyro", units=units))
+    # the loop's judge refuses this record's cross-products on its outage biases: a final
+    # model that holds them is put in its place, as a loop that kept them would hand it on
+    half = len(y) // 2
+    model = FOSModel(max_lag=4, degree=2, product_lags=4, rate=rec.rate).fit(y[:half])
+    assert any("*" in t for t in model.terms_), model.terms_  # a cross-product was chosen
+    result = dataclasses.replace(result, final_model=BoundModel(model, {}))
     handoff = hand_off(result, y, channels, sensor="gyro", units=units)
     assert not handoff.linear and handoff.scores == {}
     assert handoff.recommended == "Allan model"
