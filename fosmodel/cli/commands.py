@@ -301,7 +301,8 @@ def close_loop(args: argparse.Namespace) -> int:
         companion; a gyro's accelerometers, offered in their fast part only) is not
         analysed: a refusal of one becomes a note, and it is left out.
         """
-        names = [n for n in r.names if n != args.column]
+        # a held column (an empty cell, a bad value) may still be a driver by its name
+        names = [n for n in [*r.names, *r.held] if n != args.column]
         try:
             axis = _axes(args, [args.column], r, optional=True)
             roles = channel_roles(names, axis[0].sensor if axis else _sensor_of(r, args.column),

@@ -100,7 +100,7 @@ def imu(args: argparse.Namespace) -> int:
         write_text,
     )
     from ..io.record import Record
-    from ..workflows.imu import ImuConfig, record_axes, run_imu
+    from ..workflows.imu import TEMPERATURE, ImuConfig, record_axes, run_imu
     from ..workflows.imu_report import axis_handoffs, console_summary, write_imu_report
     from .commands import _checked, _load
 
@@ -114,7 +114,10 @@ def imu(args: argparse.Namespace) -> int:
             axes, aux = record_axes(r, args.columns, args.units, args.temperature)
         except InputError:  # said below, by record_axes itself
             return []
-        return [*(a.column for a in axes), *aux]
+        # a temperature column the loader held (an empty cell) is still the loops' driver
+        held = [c for c in r.held if c == args.temperature
+                or (args.temperature is None and TEMPERATURE.match(c))]
+        return [*(a.column for a in axes), *aux, *held]
 
     rec = _load(args, notes=False, analysed=analysed)  # every column: its temperature too
     axes, aux = record_axes(rec, args.columns, args.units, args.temperature)

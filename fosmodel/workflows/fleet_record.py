@@ -39,7 +39,16 @@ from ..noise.checks import check_record, unused_columns
 from ..noise.imu_noise import ImuNoise, imu_noise
 from ..study.harness import StudyResult
 from ..study.runner import run_study
-from .imu import STEPS, AxisResult, ImuConfig, ImuResult, loop_row, record_axes, study_row
+from .imu import (
+    STEPS,
+    TEMPERATURE,
+    AxisResult,
+    ImuConfig,
+    ImuResult,
+    loop_row,
+    record_axes,
+    study_row,
+)
 
 _T = TypeVar("_T")
 
@@ -122,7 +131,9 @@ def run_record(path: str | os.PathLike[str], store: str | os.PathLike[str],
     with threadpool_limits(limits=1, user_api="blas"):  # the same bits in any process
         rec = load_record(Path(path), **config.load, hold=True)  # every column: its temperature
         axes, aux = record_axes(rec, config.columns, config.units, config.temperature)
-        rec = settle(rec, [*(a.column for a in axes), *aux])  # the others noted, left out
+        held = [c for c in rec.held if c == config.temperature  # a driver, though held
+                or (config.temperature is None and TEMPERATURE.match(c))]
+        rec = settle(rec, [*(a.column for a in axes), *aux, *held])  # the others noted, left out
         rec, stretch = check_record(rec, axes, config.static_only)
         aux = {name: rec.column(name) for name in aux}  # the static stretch's, if one was kept
         skipped = unused_columns(rec.names, [*(a.column for a in axes), *aux],
