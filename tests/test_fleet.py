@@ -244,3 +244,23 @@ def test_a_refused_fleet_leaves_no_store_behind(files, tmp_path):
     with pytest.raises(InputError, match="^record imu0: the record has 24000 samples"):
         run_fleet(files[:1], tmp_path / "store", config)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_says_which_records_are_kept(files, tmp_path, monkeypatch, capsys):
+    """Interrupted between records, fleet says which finished records are on disk (a rerun
+    skips them) and exits 130: the code and the message agree with what is there."""
+    import fosmodel.workflows.fleet as fleet_module
+
+    store = tmp_path / "store"
+
+    def interrupted(paths, out, config, **kwargs):
+        (out / "imu0").mkdir(parents=True)
+        (out / "imu0" / MARKER).write_text("{}")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fleet_module, "run_fleet", interrupted)
+    code = cli.main(["fleet", *map(str, files), "--out", str(store)])
+    err = capsys.readouterr().err
+    assert code == 130
+    assert err == (f"fosmodel: interrupted; 1 of 3 records finished and kept in "
+                   f"{store.resolve()}/ (imu0): a rerun skips them\n")

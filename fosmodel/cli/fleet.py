@@ -48,7 +48,7 @@ def fleet(args: argparse.Namespace) -> int:
     from ..io.loader import parse_scales
     from ..io.output import writable_directory
     from ..study.runner import dask_client
-    from ..workflows.fleet import FleetConfig, run_fleet
+    from ..workflows.fleet import MARKER, FleetConfig, run_fleet
     from ..workflows.imu import ImuConfig
     from .commands import _check_dask
 
@@ -62,9 +62,17 @@ def fleet(args: argparse.Namespace) -> int:
                          columns=tuple(args.columns) if args.columns else None,
                          units=args.units, temperature=args.temperature, load=load,
                          reports=args.reports, static_only=args.static_only)
-    with dask_client(args.scheduler, args.workers, args.connect_timeout) as client:
-        result = run_fleet(args.files, out, config, client=client,
-                           progress=sys.stderr.isatty())
+    try:
+        with dask_client(args.scheduler, args.workers, args.connect_timeout) as client:
+            result = run_fleet(args.files, out, config, client=client,
+                               progress=sys.stderr.isatty())
+    except KeyboardInterrupt:
+        # each record is published whole as it ends: say which are on disk, as a rerun skips them
+        done = sorted(m.parent.name for m in out.glob(f"*/{MARKER}")) if out.is_dir() else []
+        print(f"fosmodel: interrupted; {len(done)} of {len(args.files)} records finished and "
+              f"kept in {out.resolve()}/" + (f" ({', '.join(done)})" if done else "")
+              + (": a rerun skips them" if done else ""), file=sys.stderr)
+        return 130
     print(f"fleet of {len(result.seconds)} records: {len(result.ran)} run, "
           f"{len(result.skipped)} already in the store; {len(result.table)} rows (a record "
           f"and axis each) in {out.resolve()}/fleet.md, .csv and .tex")
