@@ -30,6 +30,7 @@ from ..io.output import (
     write_text,
 )
 from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
+from ..noise.metrics import is_sensor_units
 from .flags import with_flags
 
 if TYPE_CHECKING:
@@ -96,7 +97,7 @@ def _axes(args: argparse.Namespace, columns: list[str], rec: Record,
     per_sensor = {s: units for s in SENSORS if (units := vars(args).get(f"{s}_units"))}
     named = all(None not in infer_axis(c) for c in columns)
     if optional and not (args.sensor or args.units or per_sensor or named
-                         or set(columns) & set(rec.units)):
+                         or any(is_sensor_units(rec.units.get(c, "")) for c in columns)):
         return []
     return resolve_axes(columns, per_sensor, given=args.units, declared=rec.units,
                         sensor=args.sensor)
@@ -413,7 +414,7 @@ def _sensor_of(rec: Record, column: str) -> str | None:
     """Return the sensor a column's units (as its file declares them) or its name tell, if any."""
     from ..noise.metrics import sensor_of
 
-    if column in rec.units:
+    if is_sensor_units(rec.units.get(column, "")):  # not a temperature's degC
         return sensor_of(rec.units[column])
     return infer_axis(column)[0]
 

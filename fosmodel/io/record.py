@@ -40,7 +40,10 @@ class Record:
         time column's gaps; None for a contiguous record.
     units : dict of str to str
         The units of the columns whose file says them (a ROS bag's or a ULog's
-        ``gx``: ``"rad/s"``); a column scaled with ``scale`` loses its entry.
+        ``gx``: ``"rad/s"``) or whose name spells them (``gx_dps``: ``"deg/s"``,
+        ``ax_mps2``: ``"m/s^2"``, ``temp_c``: ``"degC"``;
+        :func:`fosmodel.io.column_names.units_from_name`); a column scaled with ``scale``
+        loses its entry.
     held : dict of str to str
         With ``load_record(..., hold=True)``, the columns whose content would have refused the
         record, each with the one-line refusal: refused if analysed, else left out with a note
