@@ -74,7 +74,8 @@ def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
     """Check the record's units and stillness (:func:`~fosmodel.noise.checks.check_record`).
 
     Return it, or its longest static stretch with ``--static-only``; then say the loader's
-    notes (a refused record gets its one line and nothing else), after the stretch kept.
+    notes (a refused record gets its one line and nothing else), after the stretch kept, and
+    the hints on the axes kept (:func:`~fosmodel.noise.hints.record_hints`).
     """
     from ..noise.checks import check_record
 
@@ -84,6 +85,12 @@ def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
     for note in rec.notes:
         print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{with_flags(note)}",
               file=sys.stderr)
+    if axes:
+        from ..noise.hints import record_hints
+
+        columns = {a.column: kept.column(a.column) for a in axes}
+        for hint in record_hints(columns, axes, kept.require_rate()):
+            print(f"fosmodel: hint: {hint}", file=sys.stderr)
     return kept
 
 
