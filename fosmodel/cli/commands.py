@@ -51,7 +51,8 @@ def _load(args: argparse.Namespace, path: str | None = None,
     default ``columns``) are refused on their content, the others the loader held left out
     with a note (:func:`fosmodel.io.content.settle`; ``feeds`` says what they would have
     fed).  Its notes go to stderr, after the file's name when ``path`` is given, unless not
-    ``notes`` (:func:`_checked` says them after its checks).
+    ``notes`` (:func:`_checked` says them after its checks).  With ``--start``/``--stop``
+    only that stretch is kept (:meth:`Record.between`), and a note says so.
     """
     from ..io.content import settle
 
@@ -59,6 +60,10 @@ def _load(args: argparse.Namespace, path: str | None = None,
                       scale=parse_scales(args.scale or []), uniform=args.uniform,
                       outliers=args.outliers, gaps=args.gaps, topic=args.topic,
                       temperature_topic=args.temperature_topic, hold=True)
+    window = (vars(args).get("window_start"), vars(args).get("window_stop"))
+    if window != (None, None):  # the stretch asked for, before any analysis; its name says it
+        rec = rec.between(*window)
+        rec.source += window_label(args)
     analysed = analysed if analysed is not None else columns
     rec = settle(rec, (analysed(rec) if callable(analysed) else analysed
                        if analysed is not None else [*rec.names, *rec.held]), feeds,
@@ -68,6 +73,14 @@ def _load(args: argparse.Namespace, path: str | None = None,
             print(f"fosmodel: note: {path + ': ' if path else ''}{with_flags(note)}",
                   file=sys.stderr)
     return rec
+
+
+def window_label(args: argparse.Namespace) -> str:
+    """Say the stretch ``--start``/``--stop`` keep (`` from 60 s to 300 s``), or ``""``."""
+    start, stop = vars(args).get("window_start"), vars(args).get("window_stop")
+    if start is None and stop is None:
+        return ""
+    return f" from {start or 0:g} s" + (f" to {stop:g} s" if stop is not None else " to its end")
 
 
 def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
@@ -344,7 +357,8 @@ def close_loop(args: argparse.Namespace) -> int:
     say = lambda line: print(  # noqa: E731
         textwrap.fill(f"fosmodel: {line}", CONSOLE_WIDTH, subsequent_indent="fosmodel:     "),
         file=sys.stderr, flush=True)
-    title = args.title or f"{args.column} of " + ", ".join(Path(f).name for f in args.files)
+    title = args.title or (f"{args.column} of " + ", ".join(Path(f).name for f in args.files)
+                           + window_label(args))
     if several:
         return _close_sessions(args, recs, channels, config, say, title, out, json_path,
                                model_path)
@@ -447,7 +461,8 @@ def allan(args: argparse.Namespace) -> int:
                              sensor=axis[0].sensor if axis else None)
     fit = fit_noise(result, min_tau=args.min_tau)
     with report_directory(out, [args.file]) as tmp:
-        write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}")
+        write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}"
+                    f"{window_label(args)}")
     print(fit.summary())
     misses = fit.misses()
     if misses:
@@ -477,7 +492,8 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
     noise = imu_noise(columns, axes, rec.require_rate(), rec.source, min_tau=args.min_tau)
     joint = joint_noise(columns, noise) if len(axes) > 1 else None
     with report_directory(out, [args.file]) as tmp:
-        write_imu_noise(noise, tmp, args.title or Path(args.file).name, inflate=args.inflate)
+        write_imu_noise(noise, tmp, args.title or Path(args.file).name + window_label(args),
+                        inflate=args.inflate)
         if joint is not None:
             write_text(tmp / "joint_model.json", json.dumps(joint.to_dict(), indent=1) + "\n")
     print(noise.summary())
