@@ -671,3 +671,15 @@ def test_a_warm_up_is_a_slow_excursion_not_outliers(tmp_path):
         f"column 'temp_c': {slow} sample(s) outside [{_bounds(temp)[0]:.6g}, "
         f"{_bounds(temp)[1]:.6g}] where the median of the 101 samples about them is far out too, a "
         "slow excursion (a warm-up, a drift): not counted as outliers, kept")
+
+
+def test_units_are_read_from_the_column_names(tmp_path):
+    path = tmp_path / "named.csv"
+    path.write_text("time,gx_rads,gy_dps,ax_mps2,ay_g,temp_c,gz,vbat\n"
+                    + "".join(f"{i / 100},0.{i % 7},1.{i % 5},9.{i % 3},1.{i % 4},25.{i % 9},"
+                              f"0.{i % 6},12.{i % 2}\n" for i in range(200)))
+    rec = load_record(path)
+    assert rec.units == {"gx_rads": "rad/s", "gy_dps": "deg/s", "ax_mps2": "m/s^2",
+                         "ay_g": "g", "temp_c": "degC"}
+    scaled = load_record(path, scale={"gy_dps": 0.5})  # scaled: its units are no longer known
+    assert "gy_dps" not in scaled.units and scaled.units["gx_rads"] == "rad/s"

@@ -104,6 +104,29 @@ def duration(text: str) -> float:
     return float(m.group(1)) * _SECONDS[m.group(2) or "s"]
 
 
+def offset(text: str) -> float:
+    """``0``, ``30s``, ``10min``, ``1h`` -> a time into the record in seconds (0 allowed)."""
+    m = _DURATION.match(text.strip())
+    if not m or not np.isfinite(float(m.group(1))):
+        raise argparse.ArgumentTypeError(f"expected a time into the record like 90s, 10min or "
+                                         f"1h (a bare number is in seconds), got {text!r}")
+    return float(m.group(1)) * _SECONDS[m.group(2) or "s"]
+
+
+def add_window_options(parser: argparse.ArgumentParser) -> None:
+    """Add ``--start`` and ``--stop``: the stretch of the record analysed.
+
+    Their destinations are ``window_start`` and ``window_stop``: ``--stop`` elsewhere is a
+    stopping rule.
+    """
+    parser.add_argument("--start", type=offset, metavar="T", dest="window_start",
+                        help="leave out the record before T after its first sample, e.g. a "
+                             "warm-up (s, min or h; default: from the first sample)")
+    parser.add_argument("--stop", type=offset, metavar="T", dest="window_stop",
+                        help="leave out the record after T after its first sample (s, min or "
+                             "h; default: to its end)")
+
+
 def name_list(text: str) -> list[str]:
     """Read ``a,b,c`` into its names (blanks dropped)."""
     return [p.strip() for p in text.split(",") if p.strip()]

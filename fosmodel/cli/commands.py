@@ -30,6 +30,7 @@ from ..io.output import (
     write_text,
 )
 from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
+from ..noise.metrics import is_sensor_units
 from .flags import with_flags
 
 if TYPE_CHECKING:
@@ -50,7 +51,8 @@ def _load(args: argparse.Namespace, path: str | None = None,
     default ``columns``) are refused on their content, the others the loader held left out
     with a note (:func:`fosmodel.io.content.settle`; ``feeds`` says what they would have
     fed).  Its notes go to stderr, after the file's name when ``path`` is given, unless not
-    ``notes`` (:func:`_checked` says them after its checks).
+    ``notes`` (:func:`_checked` says them after its checks).  With ``--start``/``--stop``
+    only that stretch is kept (:meth:`Record.between`), and a note says so.
     """
     from ..io.content import settle
 
@@ -58,6 +60,10 @@ def _load(args: argparse.Namespace, path: str | None = None,
                       scale=parse_scales(args.scale or []), uniform=args.uniform,
                       outliers=args.outliers, gaps=args.gaps, topic=args.topic,
                       temperature_topic=args.temperature_topic, hold=True)
+    window = (vars(args).get("window_start"), vars(args).get("window_stop"))
+    if window != (None, None):  # the stretch asked for, before any analysis; its name says it
+        rec = rec.between(*window)
+        rec.source += window_label(args)
     analysed = analysed if analysed is not None else columns
     rec = settle(rec, (analysed(rec) if callable(analysed) else analysed
                        if analysed is not None else [*rec.names, *rec.held]), feeds,
@@ -69,11 +75,20 @@ def _load(args: argparse.Namespace, path: str | None = None,
     return rec
 
 
+def window_label(args: argparse.Namespace) -> str:
+    """Say the stretch ``--start``/``--stop`` keep (`` from 60 s to 300 s``), or ``""``."""
+    start, stop = vars(args).get("window_start"), vars(args).get("window_stop")
+    if start is None and stop is None:
+        return ""
+    return f" from {start or 0:g} s" + (f" to {stop:g} s" if stop is not None else " to its end")
+
+
 def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
     """Check the record's units and stillness (:func:`~fosmodel.noise.checks.check_record`).
 
     Return it, or its longest static stretch with ``--static-only``; then say the loader's
-    notes (a refused record gets its one line and nothing else), after the stretch kept.
+    notes (a refused record gets its one line and nothing else), after the stretch kept, and
+    the hints on the axes kept (:func:`~fosmodel.noise.hints.record_hints`).
     """
     from ..noise.checks import check_record
 
@@ -83,6 +98,12 @@ def _checked(args: argparse.Namespace, rec: Record, axes: list[Axis]) -> Record:
     for note in rec.notes:
         print(f"fosmodel: note: {'(the whole file) ' if stretch else ''}{with_flags(note)}",
               file=sys.stderr)
+    if axes:
+        from ..noise.hints import record_hints
+
+        columns = {a.column: kept.column(a.column) for a in axes}
+        for hint in record_hints(columns, axes, kept.require_rate()):
+            print(f"fosmodel: hint: {hint}", file=sys.stderr)
     return kept
 
 
@@ -96,7 +117,7 @@ def _axes(args: argparse.Namespace, columns: list[str], rec: Record,
     per_sensor = {s: units for s in SENSORS if (units := vars(args).get(f"{s}_units"))}
     named = all(None not in infer_axis(c) for c in columns)
     if optional and not (args.sensor or args.units or per_sensor or named
-                         or set(columns) & set(rec.units)):
+                         or any(is_sensor_units(rec.units.get(c, "")) for c in columns)):
         return []
     return resolve_axes(columns, per_sensor, given=args.units, declared=rec.units,
                         sensor=args.sensor)
@@ -337,7 +358,8 @@ def close_loop(args: argparse.Namespace) -> int:
     say = lambda line: print(  # noqa: E731
         textwrap.fill(f"fosmodel: {line}", CONSOLE_WIDTH, subsequent_indent="fosmodel:     "),
         file=sys.stderr, flush=True)
-    title = args.title or f"{args.column} of " + ", ".join(Path(f).name for f in args.files)
+    title = args.title or (f"{args.column} of " + ", ".join(Path(f).name for f in args.files)
+                           + window_label(args))
     if several:
         return _close_sessions(args, recs, channels, config, say, title, out, json_path,
                                model_path)
@@ -414,7 +436,7 @@ def _sensor_of(rec: Record, column: str) -> str | None:
     """Return the sensor a column's units (as its file declares them) or its name tell, if any."""
     from ..noise.metrics import sensor_of
 
-    if column in rec.units:
+    if is_sensor_units(rec.units.get(column, "")):  # not a temperature's degC
         return sensor_of(rec.units[column])
     return infer_axis(column)[0]
 
@@ -440,7 +462,8 @@ def allan(args: argparse.Namespace) -> int:
                              sensor=axis[0].sensor if axis else None)
     fit = fit_noise(result, min_tau=args.min_tau)
     with report_directory(out, [args.file]) as tmp:
-        write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}")
+        write_allan(result, fit, tmp, args.title or f"{args.column} of {Path(args.file).name}"
+                    f"{window_label(args)}")
     print(fit.summary())
     misses = fit.misses()
     if misses:
@@ -470,7 +493,8 @@ def _allan_axes(args: argparse.Namespace, out: Path, json_path: Path | None) -> 
     noise = imu_noise(columns, axes, rec.require_rate(), rec.source, min_tau=args.min_tau)
     joint = joint_noise(columns, noise) if len(axes) > 1 else None
     with report_directory(out, [args.file]) as tmp:
-        write_imu_noise(noise, tmp, args.title or Path(args.file).name, inflate=args.inflate)
+        write_imu_noise(noise, tmp, args.title or Path(args.file).name + window_label(args),
+                        inflate=args.inflate)
         if joint is not None:
             write_text(tmp / "joint_model.json", json.dumps(joint.to_dict(), indent=1) + "\n")
     print(noise.summary())

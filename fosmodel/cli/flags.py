@@ -17,7 +17,7 @@ _START = r"(?<![\w.'\"/=-])"
 #: The options the library names, by their keyword; each becomes ``--`` and its name.
 KEYWORDS = ("columns", "rate", "scale", "uniform", "outliers", "gaps", "topic",
             "temperature_topic", "loop_split", "temperature", "degree", "instance", "gyro_id",
-            "accel_id")
+            "accel_id", "start", "stop")
 # Spellings with a value that the flag spells otherwise, tried before the bare keywords.
 _SPELLINGS = (
     (re.compile(_START + r"train_s= and evaluate_s="), "--split"),

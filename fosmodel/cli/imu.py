@@ -21,6 +21,7 @@ from .arguments import (
     STATIC_ONLY_HELP,
     UNITS_HELP,
     add_loader_options,
+    add_window_options,
     duration,
     inflation,
     int_list,
@@ -39,6 +40,7 @@ def configure_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser
     """Add the ``imu`` command's arguments to ``parser`` and return it."""
     parser.add_argument("file", help=RECORD_HELP)
     add_workflow_options(parser)
+    add_window_options(parser)
     parser.add_argument("--jobs", type=positive_int, default=2,
                         help="studies and loops run at once, in worker processes")
     parser.add_argument("--title", help="title of the report")
@@ -102,7 +104,7 @@ def imu(args: argparse.Namespace) -> int:
     from ..io.record import Record
     from ..workflows.imu import TEMPERATURE, ImuConfig, record_axes, run_imu
     from ..workflows.imu_report import axis_handoffs, console_summary, write_imu_report
-    from .commands import _checked, _load
+    from .commands import _checked, _load, window_label
 
     json_path = writable_file(args.json, created=args.out) if args.json else None
     out = writable_directory(args.out)
@@ -144,7 +146,8 @@ def imu(args: argparse.Namespace) -> int:
                                                  flush=True))
     handoffs = axis_handoffs(result, {a.column: rec.column(a.column) for a in axes}, aux)
     with report_directory(out, [args.file]) as tmp:
-        write_imu_report(result, tmp, args.title or Path(args.file).name, handoffs)
+        write_imu_report(result, tmp, args.title or Path(args.file).name + window_label(args),
+                         handoffs)
     print(console_summary(result))
     for line in [*result.noise.fit_warnings(), *result.noise.export_notes(config.inflate)]:
         print(f"warning: {line}", file=sys.stderr)

@@ -14,6 +14,7 @@ from .arguments import (
     STATIC_ONLY_HELP,
     UNITS_HELP,
     add_loader_options,
+    add_window_options,
     durations,
     exog_arg,
     inflation,
@@ -121,6 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                "sensor, each judged with the others fitted:"))
     loop.add_argument("--column", required=True, help="column to model")
     add_loader_options(loop, contiguous="the residual loop")
+    add_window_options(loop)
     loop.add_argument("--aux", type=name_list, metavar="COL[,COL...]",
                       help="companions to take as inputs all the same: other axes of the same "
                            "IMU and kind, and columns named as a magnetometer, attitude, "
@@ -157,6 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
                             "figure per sensor, Kalibr/MATLAB/JSON exports; the sensor and "
                             "units come from the names (gx_dps, acc_y_mps2) where not given")
     add_loader_options(allan, contiguous="the Allan deviation")
+    add_window_options(allan)
     allan.add_argument("--units", type=parsed(UnitsSpec.parse), metavar="UNITS|COL=UNITS,...",
                        help=UNITS_HELP + "; for navigation units (default: from the "
                                           "names, e.g. gx_dps; a --column whose name tells "

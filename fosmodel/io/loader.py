@@ -49,6 +49,7 @@ import pandas as pd
 from ..core import files
 from ..core.exceptions import InputError
 from ..core.validation import did_you_mean
+from .column_names import units_from_name
 from .csv_reader import Preamble, preamble_rate
 from .formats import table_format
 from .outliers import DEFAULT_OUTLIERS, OUTLIER_MODES, find_outliers, handle_outliers
@@ -211,7 +212,8 @@ def load_record(
             if time.dtype.kind == "i" else time * unit.seconds
     elif time is not None:
         time = time.astype(float)
-    units = {name: unit for name, unit in (log.units if log else {}).items()
+    named = {name: spelled for name in data if (spelled := units_from_name(name))}
+    units = {name: unit for name, unit in {**named, **(log.units if log else {})}.items()
              if name in data and name not in (scale or {})}
     note_integer_columns(data, [*(scale or {}), *units], notes)
     segments = None

@@ -5,7 +5,7 @@ Beside them, what the loader found (:func:`fosmodel.io.loader.load_record` build
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -40,7 +40,10 @@ class Record:
         time column's gaps; None for a contiguous record.
     units : dict of str to str
         The units of the columns whose file says them (a ROS bag's or a ULog's
-        ``gx``: ``"rad/s"``); a column scaled with ``scale`` loses its entry.
+        ``gx``: ``"rad/s"``) or whose name spells them (``gx_dps``: ``"deg/s"``,
+        ``ax_mps2``: ``"m/s^2"``, ``temp_c``: ``"degC"``;
+        :func:`fosmodel.io.column_names.units_from_name`); a column scaled with ``scale``
+        loses its entry.
     held : dict of str to str
         With ``load_record(..., hold=True)``, the columns whose content would have refused the
         record, each with the one-line refusal: refused if analysed, else left out with a note
@@ -95,3 +98,39 @@ class Record:
         if self.rate is None:
             raise InputError(f"{self.source}: no time column; give the sample rate with rate=HZ")
         return self.rate
+
+    def between(self, start: float | None = None, stop: float | None = None) -> Record:
+        """Return the stretch from ``start`` to ``stop`` seconds after the first sample.
+
+        Every column, the time and the segments are cut alike, and a note says what was
+        kept; ``start`` defaults to the first sample, ``stop`` to the record's end.
+
+        Raises
+        ------
+        InputError
+            A ``start`` or ``stop`` that is negative or beyond the record, or a ``start`` not
+            before ``stop``, or no rate.
+        """
+        rate = self.require_rate()
+        n = self.n_samples
+        t = self.time - self.time[0] if self.time is not None else np.arange(n) / rate
+        length = float(t[-1]) + 1.0 / rate
+        lo, hi = 0.0 if start is None else float(start), length if stop is None else float(stop)
+        for name, value in (("start", start), ("stop", stop)):
+            if value is not None and not 0 <= value <= length:
+                raise InputError(f"{self.source}: {name}={value:g} s is beyond the record, "
+                                 f"which lasts {length:g} s")
+        if lo >= hi:
+            raise InputError(f"{self.source}: start={lo:g} s is not before stop={hi:g} s")
+        i0, i1 = (int(i) for i in np.searchsorted(t, [lo, hi], side="left"))
+        if i1 - i0 < 2:
+            raise InputError(f"{self.source}: from {lo:g} s to {hi:g} s the record holds "
+                             f"{i1 - i0} sample(s)")
+        segments = None if self.segments is None else [
+            slice(max(s.start, i0) - i0, min(s.stop, i1) - i0) for s in self.segments
+            if s.stop > i0 and s.start < i1]
+        note = (f"start={lo:g} s and stop={hi:g} s: kept that stretch of the record's "
+                f"{length:g} s ({i1 - i0} of {n} samples)")
+        return replace(self, data={k: v[i0:i1] for k, v in self.data.items()},
+                       time=None if self.time is None else self.time[i0:i1],
+                       notes=[*self.notes, note], segments=segments)

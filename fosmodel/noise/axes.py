@@ -20,27 +20,15 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from ..core.exceptions import InputError
-from .metrics import sensor_of, to_si_scale
+from ..io.column_names import after_prefix as _after_prefix
+from ..io.column_names import axis_letter as axis_letter  # re-exported: its users import it here
+from ..io.column_names import infer_axis
+from .metrics import is_sensor_units, sensor_of, to_si_scale
 
 SENSORS = ("gyro", "accel")
 #: Each sensor as the messages name it, and an example of its units.
 _NAMED = {"gyro": "a gyro", "accel": "an accelerometer"}
 _EXAMPLE_UNITS = {"gyro": "deg/s", "accel": "m/s^2"}
-#: Name prefixes before the axis letter (``gx``, ``gyro_x``, ``angular_velocity.x``); the
-#: one-letter ones only right before it.
-_PREFIXES = {
-    "gyro": ("gyroscope", "gyro", "gyr", "angular_velocity", "ang_vel", "omega", "g", "w"),
-    "accel": ("accelerometer", "linear_acceleration", "accel", "acc", "a"),
-}
-#: Units spelled in a name after the sensor and axis (``gx_dps``, ``gyro_rad[0]``, ``ax_g``).
-_UNIT_WORDS = {
-    "gyro": {"dps": "deg/s", "degs": "deg/s", "deg_s": "deg/s", "deg": "deg/s",
-             "rads": "rad/s", "rad_s": "rad/s", "radps": "rad/s", "rps": "rad/s",
-             "rad": "rad/s", "dph": "deg/h", "deg_h": "deg/h"},
-    "accel": {"g": "g", "mg": "mg", "mps2": "m/s^2", "ms2": "m/s^2", "m_s2": "m/s^2",
-              "m_s_2": "m/s^2"},
-}
-
 #: Channels that measure the motion itself, by the names they begin with: a magnetometer's
 #: axes (``mx``, ``mag_x``) read the heading, the others how the body is turned, moves or
 #: where it is.  The one-letter prefixes only right before the axis letter.
@@ -143,48 +131,6 @@ class UnitsSpec:
         return self.columns.get(column, self.every)
 
 
-def infer_axis(column: str) -> tuple[str | None, str | None]:
-    """Tell the sensor (``"gyro"``/``"accel"``) and units a column's name gives, or None each.
-
-    Examples
-    --------
-    >>> infer_axis("gx_dps"), infer_axis("acc_y"), infer_axis("temp")
-    (('gyro', 'deg/s'), ('accel', None), (None, None))
-    """
-    name = column.strip().lower()
-    for sensor, prefixes in _PREFIXES.items():
-        for prefix in prefixes:
-            rest = _after_prefix(name, prefix)
-            if rest is not None:
-                return sensor, _units_in(sensor, rest)
-    return None, None
-
-
-def axis_letter(column: str) -> str | None:
-    """Tell which axis (``"x"``, ``"y"``, ``"z"``) a gyro's or accelerometer's name gives, or None.
-
-    The letter right after the sensor's prefix (``gx_dps``, ``acc_y``), or an index
-    ``[0]``..``[2]`` after a longer prefix (``gyro_rad[1]``).
-
-    Examples
-    --------
-    >>> axis_letter("gx_dps"), axis_letter("acc_y"), axis_letter("gyro_rad[2]"), axis_letter("t")
-    ('x', 'y', 'z', None)
-    """
-    name = column.strip().lower()
-    for prefixes in _PREFIXES.values():
-        for prefix in prefixes:
-            rest = _after_prefix(name, prefix)
-            if rest is None:
-                continue
-            found = re.match(r"[._\- ]?([xyz])(?![a-z])", name[len(prefix):])
-            index = re.search(r"\[([012])\]", rest)
-            if found:
-                return found.group(1)
-            return "xyz"[int(index.group(1))] if index else None
-    return None
-
-
 def motion_kind(column: str) -> str | None:
     """Tell what of the motion a column's name says it measures, or None.
 
@@ -203,34 +149,6 @@ def motion_kind(column: str) -> str | None:
     for kind, words in _MOTION_WORDS.items():
         if any(re.match(rf"{word}(?![a-z])", name) for word in words):
             return kind
-    return None
-
-
-def _after_prefix(name: str, prefix: str) -> str | None:
-    """Return what follows ``prefix`` and the axis in ``name``, or None if it is not of it.
-
-    A one-letter prefix must be followed by the axis letter (``gx``, not ``gain``); a longer one
-    by a separator or the axis letter (``gyro_x``, ``gyrox``, ``gyro_rad[0]``).
-    """
-    if not name.startswith(prefix):
-        return None
-    rest = name[len(prefix):]
-    axis = re.match(r"[xyz](?![a-z])", rest)
-    if axis:
-        return rest[axis.end():]
-    if len(prefix) > 1 and rest[:1] in ("_", ".", "-", " ", "[", "("):
-        return rest
-    return None
-
-
-def _units_in(sensor: str, rest: str) -> str | None:
-    """Units named in the rest of a column name: its words, joined by underscores."""
-    words = [w for w in re.split(r"[^a-z0-9]+", rest) if w and w not in ("x", "y", "z")
-             and not w.isdigit()]
-    joined = "_".join(words)
-    for spelled, units in _UNIT_WORDS[sensor].items():
-        if joined == spelled or spelled in words:
-            return units
     return None
 
 
@@ -277,7 +195,7 @@ def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None,
     if stray:
         raise InputError(f"units are given for column {stray[0]!r}, which is not among the "
                          f"columns: {', '.join(names)}")
-    declared = dict(declared or {})
+    declared = {c: u for c, u in (declared or {}).items() if is_sensor_units(u)}  # not degC
     return [_resolve(spec, units, given, declared, sensor) for spec in columns]
 
 
@@ -293,7 +211,7 @@ def _resolve(spec: str, units: Mapping[str, str], given: UnitsSpec, declared: Ma
     told = given.of(column)
     if told is not None:
         return _agrees(_checked(Axis(column, sensor_of(told), told, "units given"), sensor))
-    if column in declared:
+    if column in declared and declared[column] != infer_axis(column)[1]:  # not the name's
         told = declared[column]
         return _checked(Axis(column, sensor_of(told), told, "units from the file"), sensor)
     named_sensor, named_units = infer_axis(column)

@@ -88,6 +88,11 @@ def to_si_scale(sensor: str, units: str) -> float:
     return scales[units]
 
 
+def is_sensor_units(units: str) -> bool:
+    """Tell whether a gyro or an accelerometer reads in ``units`` (a temperature's degC: no)."""
+    return any(units in scales for scales in _SI_SCALES.values())
+
+
 def sensor_of(units: str) -> str:
     """Return the sensor that reads in ``units``: no unit belongs to both.
 

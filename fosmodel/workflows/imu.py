@@ -34,6 +34,7 @@ from ..io.record import Record
 from ..loop.closeloop import LoopConfig, LoopResult, close_loop, loop_split
 from ..noise.axes import Axis, UnitsSpec, infer_axis, resolve_axes
 from ..noise.imu_noise import ImuNoise, imu_noise
+from ..noise.metrics import is_sensor_units
 from ..study.harness import METHODS, StudyConfig, StudyResult, study_split
 from ..study.runner import run_study
 
@@ -335,7 +336,8 @@ def record_axes(
     """
     temperature = temperature or next((c for c in rec.names if TEMPERATURE.match(c)), None)
     specs = list(columns or [c for c in rec.names if c != temperature and (
-        infer_axis(c)[0] or c in rec.units or (units and c in units.columns))])
+        infer_axis(c)[0] or is_sensor_units(rec.units.get(c, ""))
+        or (units and c in units.columns))])
     if not specs:
         raise InputError(f"{rec.source}: no column tells a gyro or an accelerometer by its name "
                          f"(columns: {', '.join(rec.names)}); name the axes and give their units")
