@@ -322,8 +322,10 @@ def close_loop(args: argparse.Namespace) -> int:
         companion; a gyro's accelerometers, offered in their fast part only) is not
         analysed: a refusal of one becomes a note, and it is left out.
         """
-        # a held column (an empty cell, a bad value) may still be a driver by its name
-        names = [n for n in [*r.names, *r.held] if n != args.column]
+        # a column held for a bad cell (an empty one, a word) may still be a driver; one
+        # that holds no numbers at all (booleans, text) is none
+        held = [n for n, why in r.held.items() if f"column {n!r} holds " not in why]
+        names = [n for n in [*r.names, *held] if n != args.column]
         try:
             axis = _axes(args, [args.column], r, optional=True)
             roles = channel_roles(names, axis[0].sensor if axis else _sensor_of(r, args.column),
