@@ -300,3 +300,48 @@ def test_mean_stability_fires_on_a_wandering_mean_and_not_on_white_noise():
     fired = sum(dg.mean_stability(_white(3000, 300 + seed), alpha=0.05).fired
                 for seed in range(100))
     assert fired <= _false_alarm_bound(100, 0.05)
+
+
+def test_change_point_does_not_take_a_slow_bias_instability_for_a_step():
+    """A Gauss-Markov wander of 300 s (a tenth of the record, ten batches) beside white
+    noise: batch means alone took it for a step on 40 of these 100 records at 0.001; with
+    their lag-one correlation counted where it is beyond chance, 10.  A step five times the
+    wander's spread still fires on all, and a white record's step loses no power."""
+    n, t = 30000, np.arange(30000) / 10.0
+    fired = stepped = 0
+    for seed in range(100):
+        rng = np.random.default_rng(900 + seed)
+        x = rng.standard_normal(n) + lfilter([0.02], [1, -np.exp(-1 / 3000)],
+                                             rng.standard_normal(n))
+        fired += dg.change_point(x, t).fired
+        if seed < 20:
+            stepped += dg.change_point(x + 4.0 * (t >= 1000.0), t).fired
+    assert fired <= 12
+    assert stepped == 20
+    white = [dg.change_point(_white(n, 40 + s) + 0.3 * (t >= 1000.0), t) for s in range(10)]
+    assert all(f.fired and abs(f.evidence["time_s"] - 1000.0) < 60 for f in white)
+
+
+def test_the_step_test_widens_its_variance_by_the_batch_correlation():
+    """The factor is (1 + phi) / (1 - phi) of the batch means' lag-one correlation,
+    clipped to 0.9 and taken as 0 within chance (1.96 / sqrt(30)): checked by hand on batch
+    means that oscillate slowly (phi 0.8), that are half a cosine (phi beyond the clip),
+    that alternate (phi below 0) and that oscillate fast (phi 0.23, within chance)."""
+    def batched(means: np.ndarray) -> np.ndarray:
+        return np.repeat(means, 10)
+
+    means = np.sin(2 * np.pi * np.arange(30) / 10)
+    phi = float(means[1:] @ means[:-1] / (means @ means))
+    assert 0.7 < phi < 0.85
+    lrv, batches = dg._batch_variance(batched(means))
+    assert batches == 30
+    assert lrv == pytest.approx(10 * float(means @ means) / 29 * (1 + phi) / (1 - phi))
+    smooth = np.cos(np.pi * np.arange(30) / 29)
+    assert dg._batch_variance(batched(smooth))[0] == pytest.approx(
+        10 * float(smooth @ smooth) / 29 * 1.9 / 0.1)
+    alternating = np.tile([1.0, -1.0], 15)
+    assert dg._batch_variance(batched(alternating))[0] == pytest.approx(10 * 30 / 29)
+    fast = np.sin(2 * np.pi * np.arange(30) / 30 * 6.3)
+    weak = float(fast[1:] @ fast[:-1] / (fast @ fast))
+    assert 0.0 < weak < 1.96 / np.sqrt(30)
+    assert dg._batch_variance(batched(fast))[0] == pytest.approx(10 * float(fast @ fast) / 29)
