@@ -27,6 +27,7 @@ few per cent of the signal variance).
 from __future__ import annotations
 
 import inspect
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -746,6 +747,34 @@ def _companion_knocks(column: str = "az_mps2", count: int = 39, knock_s: float =
     spec = _static_imu()
     spec["sources"].append(Knocks(count, amplitude, knock_s, channel=column, name="knocks"))
     return spec
+
+
+#: A phone's gyro as a user logs it: 10 Hz for six hours, in rad/s, a 16-bit read-out at
+#: +-2000 deg/s (LSB 0.061 deg/s, above the 0.022 deg/s of white noise per sample), white
+#: noise of 0.007 deg/s/sqrt(Hz) (0.42 deg/sqrt(h)), a bias instability of 20 deg/h and a
+#: random walk that moves the bias by about 0.01 deg/s over the record (choices in the range
+#: of consumer MEMS data sheets).
+PHONE_DURATION, PHONE_RATE = 6 * 3600.0, 10.0
+PHONE_LSB = math.radians(4000.0 / 2**16)
+PHONE_WHITE = math.radians(0.007)
+PHONE_B, PHONE_K = math.radians(20.0 / 3600.0) / 0.664, math.radians(6.8e-5)
+PHONE_GYROS = ("gx_rads", "gy_rads", "gz_rads")
+
+
+@_register("phone_gyro", PHONE_DURATION, PHONE_RATE,
+           "A phone's three gyros at 10 Hz for 6 h in rad/s: white noise, a 20 deg/h bias "
+           "instability, a bias random walk and a 0.061 deg/s read-out step; no effect "
+           "beyond the stochastic ones")
+def _phone_gyro():
+    sources = []
+    for column in PHONE_GYROS:
+        sources += [WhiteNoise(PHONE_WHITE, channel=column, name=f"{column}_white"),
+                    BiasInstability(PHONE_B, 1.0, 3000.0, channel=column,
+                                    name=f"{column}_bias_instability"),
+                    RandomWalk(PHONE_K, channel=column, name=f"{column}_random_walk")]
+    return dict(sources=sources, target="gx_rads", units="rad/s",
+                column_units={c: "rad/s" for c in PHONE_GYROS},
+                quantizers={c: Quantizer(PHONE_LSB) for c in PHONE_GYROS})
 
 
 # --- six-axis records of one sensor: temperature sweeps, sessions, shared noise ---------------
