@@ -59,7 +59,8 @@ def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
     low.fill_between(result.taus, *np.clip([model / result.upper, model / result.lower],
                                            *RATIO_RANGE), color="C0", alpha=0.25,
                      label="data's 68 % interval")
-    plot_ratio(low, result.taus, model / result.adev, fit.start, "k", label="fit / data")
+    if plot_ratio(low, result.taus, model / result.adev, fit.start, "k", label="fit / data"):
+        frame_ratio(low)
     low.axhline(1.0, color="0.4", lw=0.8)
     if fit.start:
         low.axvspan(result.taus[0], fit.fitted_taus[0], color="0.85",
@@ -93,8 +94,21 @@ def plot_ratio(ax: Axes, taus: np.ndarray, ratio: np.ndarray, start: int, color:
     for edge, side, marker in ((high, ratio > high, "^"), (low, ratio < low, "v")):
         if side.any():
             ax.plot(taus[side], np.full(int(side.sum()), edge), marker, color=color, ms=5,
-                    label=BEYOND if label and marker == "^" else None)
+                    clip_on=False, label=BEYOND if label and marker == "^" else None)
     return bool(beyond.any())
+
+
+def frame_ratio(ax: Axes) -> None:
+    """Set a fit/data panel with points beyond :data:`RATIO_RANGE` to that range, labelled.
+
+    Its edges are where the triangles of :func:`plot_ratio` sit; left to the autoscaling, a
+    band or a layout could widen it past them.
+    """
+    from matplotlib.ticker import FixedLocator
+
+    ax.set_ylim(*RATIO_RANGE)
+    low, high = RATIO_RANGE
+    ax.yaxis.set_major_locator(FixedLocator(np.arange(low, high + low / 2, low).tolist()))
 
 
 def _readoff_marks(ax: Axes, fit: NoiseFit, result: AllanResult) -> None:

@@ -67,7 +67,7 @@ from ..typeset.latex import mathtext_units
 from ..typeset.summary import Summary
 from .allan import FLICKER_FLOOR, AllanResult, allan_deviation
 from .allan_fit import GAUSS_MARKOV, NoiseFit, fit_noise
-from .allan_report import BEYOND, plot_ratio, write_allan
+from .allan_report import BEYOND, frame_ratio, plot_ratio, write_allan
 from .axes import SENSORS, Axis
 from .checks import GRAVITY_TOLERANCE
 from .exports import (
@@ -411,6 +411,7 @@ def _sensor_figure(axes: Sequence[AxisNoise], sensor: str) -> Figure:
     if beyond:  # one entry for every axis's triangles
         low.plot([], [], "^", color="0.3", ms=5, label=BEYOND)
         low.legend(fontsize="small")
+        frame_ratio(low)
     wrap_title(top, f"{sensor}: overlapping Allan deviation (dots, 68 % bands) and the fitted "
                "IEEE Std 952 sums (lines)", fontsize="medium")
     return fig
