@@ -88,7 +88,7 @@ def test_a_ros2_bag_is_read_with_its_units(imu_bag, tmp_path, capsys):
 def test_refusals_take_one_line_and_write_nothing(imu_csv, tmp_path, capsys):
     path, _ = imu_csv
     out = tmp_path / "never"
-    code, _, err = _run(["imu", path, *FAST, "--out", out], capsys)
+    code, _, err = _run(["imu", path, *FAST, "--split", "180s,180s", "--out", out], capsys)
     assert code == 2 and not out.exists()
     assert err.strip().splitlines()[-1] == (
         "fosmodel: error: the record has 30000 samples (300 s at 100 Hz), too short for these "
@@ -116,7 +116,7 @@ def test_the_help_lists_the_options_with_their_defaults(capsys):
         main(["imu", "--help"])
     text = " ".join(capsys.readouterr().out.split())  # as one line, however argparse wraps
     for option, default in (("--orders", "1-10"), ("--protocol", "fair"),
-                            ("--split", "180s,180s"), ("--jobs", "2")):
+                            ("--split", "50%,20%"), ("--jobs", "2")):
         assert option in text and f"(default: {default})" in text, option
     assert "--loop-split" in text and "(default: the study's, so that both score on one " \
         "prediction segment)" in text
@@ -150,3 +150,51 @@ def test_a_readable_header_goes_through_every_step(readable_csv, tmp_path, capsy
         channels = {name: frame[name].to_numpy() for name in model.input_columns()}
         pred = model.predict(frame[column].to_numpy(), channels)
         assert np.isfinite(pred[model.lag_window_:]).all()
+
+
+@pytest.fixture(scope="module")
+def long_csv(tmp_path_factory):
+    """A gyro axis of 2.4 h at 2 Hz: long enough that 3 min is a small part of it."""
+    from data_synth import make_scenario
+
+    rec = make_scenario("static_imu", duration=8640.0, rate=2.0, seed=7)
+    path = tmp_path_factory.mktemp("long") / "long.csv"
+    pd.DataFrame({"time": np.arange(17_280) / 2.0, "gx_dps": rec.columns["gx_dps"]}
+                 ).to_csv(path, index=False)
+    return path
+
+
+def test_the_default_split_is_in_proportion_to_the_record(long_csv, tmp_path, capsys):
+    """A 2.4 h record is fitted on its first 1.2 h, not on 3 min of warm-up."""
+    code, out, _ = _run(["imu", long_csv, "--orders", "1", "--degrees", "1", "--methods",
+                         "fos,burg", "--jobs", "1", "--json", tmp_path / "o.json",
+                         "--out", tmp_path / "o"], capsys)
+    assert code == 0
+    split = ("Split (the study's and the loop's): fitting 0-4320 s (50 %), evaluation "
+             "4320-6048 s (20 %), prediction 6048-8640 s (30 %).")
+    assert split in (tmp_path / "o" / "report.md").read_text()
+    assert " ".join(out.split()).startswith(split)  # wrapped for the console
+    loop = json.loads((tmp_path / "o.json").read_text())["loops"]["gx_dps"]
+    assert loop["segments_s"] == {"train": [0.0, 4320.0], "evaluate": [4320.0, 6048.0],
+                                  "predict": [6048.0, 8640.0]}
+
+
+def test_a_short_record_takes_the_proportional_split_too(imu_csv, tmp_path, capsys):
+    """300 s: 150 s fitted, 60 s to choose on, 90 s predicted (the 30 s outages fit)."""
+    path, _ = imu_csv
+    code, out, _ = _run(["imu", path, "--columns", "gx_dps", "--orders", "1", "--degrees", "1",
+                         "--methods", "fos,burg", "--jobs", "1", "--out", tmp_path / "o"],
+                        capsys)
+    assert code == 0
+    assert " ".join(out.split()).startswith(
+        "Split (the study's and the loop's): fitting 0-150 s (50 %), evaluation 150-210 s "
+        "(20 %), prediction 210-300 s (30 %).")
+
+
+def test_the_loop_takes_a_split_of_its_own_when_asked(imu_csv):
+    from fosmodel.cli.parser import build_parser
+
+    args = build_parser().parse_args(["imu", "x.csv", "--out", "o", "--loop-split", "60s,30s"])
+    config = ImuConfig().on_record(30_000, 100.0, args.split, args.loop_split)
+    assert (config.train_s, config.evaluate_s) == (150.0, 60.0)
+    assert config.loop_split == (0.2, 0.1)

@@ -300,3 +300,100 @@ def test_every_figure_of_the_allan_commands_reads(tmp_path, figure_log, capsys):
     checked = log()
     assert len(checked) == 1 + 2 + 6
     assert {path: problems for path, problems in checked.items() if problems} == {}
+
+
+def test_a_long_allan_title_is_wrapped_within_its_panel(tmp_path):
+    """A record's name after the head would run past the panel's right edge on one line."""
+    y = np.random.default_rng(1).standard_normal(5000)
+    result = allan_deviation(y, 100.0, units="m/s^2", sensor="accel")
+    fig = allan_figure(result, fit_noise(result), "static_imu_record_long_name.csv.gz: ax_mps2")
+    save_figure(fig, tmp_path, "allan")
+    fig.draw_without_rendering()  # the extents in the figure's own renderer
+    title, panel = fig.axes[0].title, fig.axes[0]
+    assert title.get_text() == ("Allan deviation and the fitted noise terms:\n"
+                                "static_imu_record_long_name.csv.gz: ax_mps2")
+    assert title.get_window_extent().width <= panel.get_window_extent().width
+    assert figure_problems(fig) == []
+
+
+@pytest.fixture(scope="module")
+def filtered():
+    """Three gyro axes averaged over 20 samples: below 0.2 s the deviation falls under the
+    white noise line the fit (from 1 s on) draws, the fit over the data up to about 4."""
+    from scipy.ndimage import uniform_filter1d
+
+    rng = np.random.default_rng(4)
+    return {f"g{a}_dps": uniform_filter1d(rng.standard_normal(60_000), 20) for a in "xyz"}
+
+
+def _ratio_checks(low, fig):
+    from fosmodel.noise.allan_report import BEYOND, RATIO_RANGE
+
+    assert low.get_ylim() == RATIO_RANGE  # whatever the layout, the band or the title
+    shown = np.concatenate([line.get_ydata() for line in low.lines if len(line.get_ydata())])
+    assert np.nanmax(shown) <= RATIO_RANGE[1] + 1e-12  # the far-off taus at the edge
+    edge = [line for line in low.lines if line.get_marker() == "^" and len(line.get_ydata())]
+    assert edge and all(np.all(line.get_ydata() == RATIO_RANGE[1]) for line in edge)
+    labels = [t.get_text() for legend in [*fig.legends, *(a.get_legend() for a in fig.axes)]
+              if legend for t in legend.get_texts()]
+    assert BEYOND in labels
+    hollow = [line for line in low.lines if line.get_markerfacecolor() == "none"
+              and len(line.get_xdata())]
+    assert hollow and max(max(line.get_xdata()) for line in hollow) < 1.0  # the left-out taus
+
+
+def test_the_allan_fit_over_data_keeps_to_the_range_that_matters(filtered, tmp_path):
+    result = allan_deviation(filtered["gx_dps"], 100.0, units="deg/s", sensor="gyro")
+    fit = fit_noise(result, min_tau=1.0)
+    assert (fit.model_adev(result.taus) / result.adev).max() > 3  # what would flatten it
+    fig = allan_figure(result, fit, "a_rather_long_record_name_of_a_phone.csv.gz: gx_dps")
+    save_figure(fig, tmp_path, "allan")
+    _ratio_checks(fig.axes[1], fig)
+    assert figure_problems(fig) == []
+
+
+def test_the_combined_allan_figure_marks_the_taus_left_out(filtered, tmp_path):
+    from fosmodel.noise.axes import resolve_axes
+    from fosmodel.noise.imu_noise import imu_noise
+
+    axes = resolve_axes(list(filtered))
+    fig = imu_noise(filtered, axes, 100.0, "rec.csv", min_tau=1.0).figures()["gyro"]
+    save_figure(fig, tmp_path, "allan_gyro")
+    top, low = fig.axes
+    left_out = [line for line in top.lines if line.get_markerfacecolor() == "none"]
+    assert len([line for line in left_out if len(line.get_xdata())]) == 3  # one per axis
+    assert "left out of the fit (the sensor's filtering)" in [
+        t.get_text() for t in top.get_legend().get_texts()]
+    _ratio_checks(low, fig)
+    assert figure_problems(fig) == []
+
+
+def _style(handle):
+    return (str(handle.get_color()), handle.get_linestyle(), handle.get_linewidth(),
+            handle.get_marker())
+
+
+def test_every_legend_entry_of_the_loop_figure_has_a_style_of_its_own(loop_result):
+    fig = residual_figure(loop_result, "gx")
+    legend = fig.legends[0]
+    labels = [t.get_text() for t in legend.get_texts()]
+    assert "before temp_c" in labels and "before" in labels
+    styles = [_style(h) for h in legend.legend_handles]
+    assert len(set(styles)) == len(styles), dict(zip(labels, styles))
+
+
+def test_the_loop_figure_puts_a_power_of_ten_in_the_label_not_over_it(tmp_path):
+    """A gyro in rad/s: residuals of 1e-4, products of two lags of 1e-8."""
+    n, rate = 12_000, 50.0
+    e = np.random.default_rng(3).standard_normal(n + 500)
+    y = 1e-4 * lfilter([1.0], [1.0, -0.8, 0.3], e)[500:]
+    result = close_loop(y, {}, LoopConfig(rate=rate, sensor="gyro", units="rad/s"))
+    fig = residual_figure(result, "gx")
+    save_figure(fig, tmp_path, "residual")
+    panel = fig.axes[6]
+    assert panel.get_xlabel().startswith("binned product of two lags ($10^{-")
+    assert panel.get_xlabel().endswith("$ (rad/s)$^{2}$)")
+    for ax in fig.axes[:7]:
+        for axis in (ax.xaxis, ax.yaxis):
+            assert axis.get_offset_text().get_text() == "", (ax.get_title(), axis)
+    assert figure_problems(fig) == []

@@ -429,3 +429,42 @@ def test_the_page_check_finds_a_table_too_wide_and_a_float_too_long(tmp_path):
     assert set(found) == {"wide", "long"}
     assert "Overfull \\hbox" in found["wide"][0]
     assert "Float too large for page" in found["long"][0]
+
+
+def test_a_power_of_ten_is_estimated_as_wide_as_latex_sets_it():
+    r"""pdflatex sets ``$4.456\times10^{-4}$`` 55.74 pt wide and ``$4.456\times10^{4}$``
+    49.49 pt (``\settowidth``): the operator's spaces, the 7 pt power, the math minus."""
+    from fosmodel.typeset.tables import _scientific, text_cell
+
+    assert _scientific(4.456e-4).width == pytest.approx(55.74, abs=0.1)
+    assert _scientific(4.456e4).width == pytest.approx(49.49, abs=0.1)
+    assert text_cell(4.456e-7).width == pytest.approx(55.74, abs=0.1)  # among text
+
+
+#: The noise terms of an accelerometer axis with a sinusoid (ADIS16405 session 1, az in g):
+#: six scientific columns and ``acceleration random walk``, 15 pt over a landscape page when
+#: a power of ten was taken for 7 pt narrower than it is.
+_ACCEL_NOISE = pd.DataFrame({
+    "Term": list("QNBKRS"),
+    "Noise": ["quantization", "velocity random walk", "bias instability",
+              "acceleration random walk", "rate ramp", "sinusoid"],
+    "Coefficient": [None, 4.456e-4, 2.937e-4, 2.279e-5, None, 7.242e-4],
+    "Std. error": [None, 4.769e-6, 1.823e-5, 5.542e-6, None, 1.910e-5],
+    "Lower 68 %": [None, 4.409e-4, 2.771e-4, 1.882e-5, None, 7.058e-4],
+    "Upper 68 %": [None, 4.504e-4, 3.138e-4, 3.121e-5, None, 7.440e-4],
+    "Upper limit": [1.451e-5, None, None, None, 7.171e-7, None],
+    "Read-off": [None, 6.481e-4, 3.389e-4, 3.539e-5, None, None],
+    "Units": ["g*s", "g*sqrt(s)", "g", "g/sqrt(s)", "g/s", "g"],
+    "Navigation": [None, 0.2622, 0.2937, 48.28, None, 0.7242],
+    "Navigation upper limit": [1.423e-4, None, None, None, 91.15, None],
+    "Navigation read-off": [None, 0.3814, 0.3389, 74.97, None, None],
+    "Navigation units": ["m/s", "m/s/sqrt(h)", "mg", "m/s/h/sqrt(h)", "m/s/h^2", "mg"],
+    "Resolved": ["no", "yes", "yes", "yes", "no", "yes"]}).astype(object)
+
+
+@pytest.mark.skipif(PDFLATEX is None, reason="pdflatex is not installed")
+def test_an_accelerometer_s_noise_table_fits_its_page(tmp_path):
+    source = latex_table(_ACCEL_NOISE, "imu1.csv.gz: az_g: IEEE Std 952 noise terms fitted "
+                         "to the Allan deviation", table_label("imu1", "az_g"))
+    assert structural_problems(source) == []
+    assert _page_problems({"noise.tex": source}, tmp_path) == {}

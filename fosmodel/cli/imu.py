@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..io.split import SplitSpec
+from ..io.split import PROPORTIONAL, SplitSpec
 from ..noise.axes import UnitsSpec
 from .arguments import (
     INFLATE_HELP,
@@ -69,8 +69,11 @@ def add_workflow_options(parser: argparse.ArgumentParser) -> None:
                         help="comma-separated among " + ",".join(METHODS))
     parser.add_argument("--protocol", choices=("paper", "fair", "both"), default="fair",
                         help="the study's protocol (paper: baselines on denoised data)")
-    parser.add_argument("--split", type=parsed(SplitSpec.parse), default="180s,180s",
-                        metavar="TRAIN,EVALUATE", help="the study's segments: " + SPLIT_HELP)
+    parser.add_argument("--split", type=parsed(SplitSpec.parse), default=str(PROPORTIONAL),
+                        metavar="TRAIN,EVALUATE",
+                        help="the study's segments: " + SPLIT_HELP + ", in proportion to "
+                        "the record by default, as close-loop's (default: "
+                        + str(PROPORTIONAL).replace("%", "%%") + ")")
     parser.add_argument("--loop-split", type=parsed(SplitSpec.parse), metavar="TRAIN,EVALUATE",
                         help="the loop's segments, if not those of --split: " + SPLIT_HELP
                         + " (default: the study's, so that both score on one prediction "
@@ -132,11 +135,10 @@ def imu(args: argparse.Namespace) -> int:
         print(f"fosmodel: note: column {column!r} skipped: {with_flags(why)}", file=sys.stderr)
     rate = rec.require_rate()
 
+    settings = ImuConfig(**workflow_settings(args), n_jobs=args.jobs)
+
     def at(n: int) -> ImuConfig:  # the settings for a record of n samples
-        train_s, evaluate_s = args.split.seconds(n, rate)
-        return ImuConfig(**workflow_settings(args), train_s=train_s, evaluate_s=evaluate_s,
-                         loop_split=args.loop_split and args.loop_split.fractions(n, rate),
-                         n_jobs=args.jobs)
+        return settings.on_record(n, rate, args.split, args.loop_split)
 
     at(rec.n_samples).check(rec.n_samples, rate, axes, at=at)  # too short: one message
     config = at(rec.n_samples)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from .._version import __version__
-from ..io.split import SplitSpec
+from ..io.split import PROPORTIONAL, SplitSpec
 from ..noise.axes import UnitsSpec
 from .arguments import (
     INFLATE_HELP,
@@ -136,7 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
     loop.add_argument("--sensor", choices=("accel", "gyro"),
                       help="sensor of the column (the units tell it; checked against them)")
     loop.add_argument("--max-lag", type=int, default=10, help="L of the starting model")
-    loop.add_argument("--split", type=parsed(SplitSpec.parse), default="50%,20%",
+    loop.add_argument("--split", type=parsed(SplitSpec.parse), default=str(PROPORTIONAL),
                       metavar="TRAIN,EVALUATE", help=SPLIT_HELP)
     loop.add_argument("--horizons", type=durations, default="30s,5min,30min",
                       metavar="T[,T...]",

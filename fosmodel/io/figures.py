@@ -18,7 +18,8 @@ series in a panel than a reader can tell apart, a title or label cut by the figu
 names a file, and appends a line per figure to that file (the tests read it, also from the
 worker processes that draw a report's figures).
 :func:`legend_outside` puts one legend for a whole figure beside its panels; :func:`fit_title`
-puts a long title on two lines rather than past the figure's edges.
+puts a long title on two lines rather than past the figure's edges, :func:`wrap_title` a
+panel's on as many as keep it within the panel.
 """
 
 from __future__ import annotations
@@ -26,9 +27,10 @@ from __future__ import annotations
 import math
 import os
 import re
+import textwrap
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -40,6 +42,7 @@ if TYPE_CHECKING:
     from matplotlib.axis import Axis
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
+    from matplotlib.text import Text
     from matplotlib.ticker import Formatter
     from matplotlib.transforms import BboxBase
 
@@ -172,6 +175,38 @@ def fit_title(fig: Figure, head: str, tail: str) -> None:
     title = fig.suptitle(f"{head}: {tail}")
     if title.get_window_extent().width > fig.bbox.width:
         title.set_text(f"{head}:\n{tail}")
+
+
+def wrap_title(ax: Axes, text: str, fontsize: str | float | None = None) -> Text:
+    """Title ``ax`` ``text``, on as many lines as keep it within the axes' width.
+
+    Broken first after its first ``: `` (the head above a record's and a column's name), then
+    between words; a title no break fits (one long word) is set smaller.  The figure is laid
+    out first, so that the width is the axes' as saved.
+    """
+    title = ax.set_title(text)
+    if fontsize is not None:
+        title.set_fontsize(fontsize)
+    # a subfigure's panel: its root figure lays it out
+    fig = cast("Figure", getattr(ax.figure, "figure", ax.figure))
+    fig.draw_without_rendering()  # the layout engine sizes the axes in a draw
+    width = ax.get_window_extent().width
+
+    def fits(candidate: str) -> bool:
+        title.set_text(candidate)
+        return title.get_window_extent().width <= width
+
+    head, colon, tail = text.partition(": ")
+    candidates = [text, *([f"{head}:\n{tail}"] if colon else []),
+                  *(textwrap.fill(text, columns, break_long_words=False, break_on_hyphens=False)
+                    for columns in range(len(text) - 4, 15, -4))]
+    if any(fits(candidate) for candidate in candidates):
+        return title
+    size = float(title.get_fontsize())
+    while size > 6 and not fits(title.get_text()):
+        size -= 1
+        title.set_fontsize(size)
+    return title
 
 
 def legend_outside(fig: Figure, axes: Sequence[Axes] | None = None) -> None:

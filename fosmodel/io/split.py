@@ -16,6 +16,10 @@ from ..core.exceptions import InputError
 
 #: Seconds in each unit of a duration; ``%`` is a percent of the record.
 _SECONDS = {"s": 1.0, "min": 60.0, "h": 3600.0}
+#: The default split of the steps that judge a model on records of any length (the residual
+#: loop, the six-axis workflow): half the record fitted, a fifth evaluated, the rest predicted.
+#: In proportion to the record, so that a long record's fit is not its warm-up alone.
+TRAIN_FRACTION, EVALUATE_FRACTION = 0.5, 0.2
 
 
 @dataclass(frozen=True)
@@ -70,6 +74,15 @@ class Split:
     def fraction_bounds(n: int, train: float, evaluate: float) -> tuple[int, int]:
         """Return where the evaluation and the prediction segments of :meth:`by_fraction` start."""
         return round(train * n), round((train + evaluate) * n)
+
+    def describe(self, rate: float) -> str:
+        """Say the segments' bounds and shares: ``fitting 0-300 s (50 %), evaluation ...``."""
+        n = self.predict.stop
+        return ", ".join(
+            f"{name} {part.start / rate:.6g}-{part.stop / rate:.6g} s "
+            f"({100 * (part.stop - part.start) / n:.3g} %)"
+            for name, part in zip(("fitting", "evaluation", "prediction"),
+                                  (self.train, self.evaluate, self.predict)))
 
     def items(self) -> list[tuple[str, slice]]:
         """``("train", slice)``, ``("evaluate", ...)``, ``("predict", ...)``, in order."""
@@ -156,6 +169,10 @@ class SplitSpec:
     def __str__(self) -> str:
         """Write the split as it is parsed: ``180s,180s``, ``50%,20%``."""
         return ",".join(f"{value:g}{unit}" for value, unit in (self.train, self.evaluate))
+
+
+#: :data:`TRAIN_FRACTION` and :data:`EVALUATE_FRACTION` as a split a user gives: ``50%,20%``.
+PROPORTIONAL = SplitSpec((100 * TRAIN_FRACTION, "%"), (100 * EVALUATE_FRACTION, "%"))
 
 
 def _length(text: str) -> tuple[float, str] | None:

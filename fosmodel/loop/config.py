@@ -10,6 +10,7 @@ import numpy as np
 
 from ..core.exceptions import OptionError
 from ..core.fos import STOP_RULES
+from ..io.split import EVALUATE_FRACTION, TRAIN_FRACTION
 from ..noise.metrics import to_si_scale
 
 #: The outage lengths (s) the loop judges and reports at by default: what a navigation filter
@@ -80,8 +81,8 @@ class LoopConfig:
     sensor: str | None = None
     units: str | None = None
     max_lag: int = 10
-    train: float = 0.5
-    evaluate: float = 0.2
+    train: float = TRAIN_FRACTION
+    evaluate: float = EVALUATE_FRACTION
     alpha: float = 1e-3
     accept_alpha: float = 0.01
     max_effects: int = 5

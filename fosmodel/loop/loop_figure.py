@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..io.figures import PLAIN_DECADES, fit_title, legend_outside
+from ..io.figures import PLAIN_DECADES, fit_title, legend_outside, plain_labels
 from ..typeset.latex import mathtext_units
 from .closeloop import LoopResult
 from .diagnose import Finding
@@ -29,8 +29,9 @@ _STYLES: dict[str, dict[str, Any]] = {"before": {"color": "0.6", "lw": 2.6, "ls"
 #: two series (before, after), and more than a few cannot be told apart; the others are named
 #: in the text panel.
 _SHOWN_CHANNELS = 2
-#: The shown channels' line styles, in order of correlation.
-_CHANNEL_LINES = ("-", ":")
+#: The shown channels' line styles and markers, in order of correlation: none is the before
+#: or the after style of the other panels, so that each legend entry has a style of its own.
+_CHANNEL_LINES = (("-.", "o"), (":", "^"))
 
 
 def residual_figure(result: LoopResult, title: str) -> Figure:
@@ -56,10 +57,10 @@ def residual_figure(result: LoopResult, title: str) -> Figure:
         axes[2].loglog(al["taus"], al["adev"], marker="o" if label == "before" else "s",
                        ms=5 if label == "before" else 3, label=label, **style)
         aux = {f.evidence["channel"]: f for f in findings if f.test == "aux" and f.plot}
-        for channel, ls in zip(shown, _CHANNEL_LINES):
+        for channel, (ls, marker) in zip(shown, _CHANNEL_LINES):
             f = aux[channel]
             axes[3].plot(f.plot["lags"], f.plot["rho"], label=f"{label} {channel}",
-                         **{**style, "ls": ls})
+                         **{**style, "ls": ls}, marker=marker, ms=3)
         tr = by["trend"].plot
         axes[4].plot(tr["second"], tr["mean"], label=label, **style)
         axes[4].plot(tr["time"], tr["fit"], **{**style, "lw": 2 * style["lw"]})
@@ -85,6 +86,8 @@ def residual_figure(result: LoopResult, title: str) -> Figure:
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
+        for name in ("x", "y"):
+            _plain_ticks(ax, name)
     axes[7].axis("off")
     axes[7].text(0, 1, _fired_text(result, shown), va="top", family="monospace",
                  fontsize="small")
@@ -147,6 +150,33 @@ def _frame(ax: Axes, name: str, also: list[float] | None = None) -> None:
     set_lim(first, last)
 
 
+def _plain_ticks(ax: Axes, name: str) -> None:
+    """Label a linear axis without an offset text: a power of ten goes into its label.
+
+    Matplotlib writes values of 1e-6 as ``1e-6`` at the axis's end, over the label; here the
+    ticks read ``-2``, ``0``, ``2`` and the label ``... ($10^{-6}$ (rad/s)$^{2}$)``.
+    """
+    from matplotlib import ticker
+
+    axis = ax.yaxis if name == "y" else ax.xaxis
+    if axis.get_scale() != "linear" or not ax.lines:
+        return
+    ticks = np.asarray(axis.get_majorticklocs(), dtype=float)
+    largest = float(np.max(np.abs(ticks))) if ticks.size else 0.0
+    power = math.floor(math.log10(largest)) if largest > 0 else 0
+    if -3 <= power < 4:
+        axis.set_major_formatter(ticker.ScalarFormatter(useOffset=False))
+        return
+    power = 3 * math.floor(power / 3)  # engineering: 10^-6, 10^-3, 10^3
+    axis.set_major_locator(ticker.FixedLocator(ticks.tolist()))
+    axis.set_major_formatter(ticker.FixedFormatter(plain_labels((ticks / 10.0**power).tolist())))
+    label = axis.get_label().get_text()
+    factor = f"$10^{{{power}}}$"
+    at = label.rfind(" (") + 2 if label.endswith(")") else 0
+    axis.set_label_text(f"{label[:at]}{factor} {label[at:]}" if at > 1
+                        else f"{label} ({factor})")
+
+
 def _log_limits(low: float, high: float) -> tuple[float, float]:
     """Return the 1, 2, 5 x 10^k values around ``low`` and ``high``, a decade apart at least."""
     bottom, top = _round_125(low, up=False), _round_125(high, up=True)
@@ -178,7 +208,7 @@ def _panels(units: str) -> list[tuple[str, str, str]]:
             ("slow part: 1 s means and trend fit", "time (s)", f"residual ({u})"),
             ("CUSUM of the residual (step test)", "time (s)", f"cumulative sum ({u})"),
             ("residual against the strongest product",
-             f"binned product of two lags, {mathtext_units(f'({units})^2')}",
+             f"binned product of two lags ({mathtext_units(f'({units})^2')})",
              f"mean residual ({u})")]
 
 

@@ -14,11 +14,17 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from ..io.figures import legend_outside
+from ..io.figures import legend_outside, wrap_title
 from ..io.output import save_figure, write_tables
 from ..typeset.latex import mathtext_units
 from .allan import AllanResult
 from .allan_fit import NoiseFit
+
+#: The fit/data panels' range: within a factor of two is where the fit is judged; a point
+#: beyond is drawn at the edge rather than flattening the rest.
+RATIO_RANGE = (0.5, 2.0)
+#: The legend entry of the points beyond it.
+BEYOND = f"fit / data beyond {RATIO_RANGE[0]:g}-{RATIO_RANGE[1]:g} (at the edge)"
 
 
 def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
@@ -49,12 +55,12 @@ def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
     _readoff_marks(ax, fit, result)
     ax.set_ylabel(f"Allan deviation ({mathtext_units(result.units or 'units')})")
     ax.grid(True, which="both", alpha=0.3)
-    ax.set_title(mathtext_units(f"Allan deviation and the fitted noise terms: {title}"))
     model = fit.model_adev(result.taus)
-    low.fill_between(result.taus, model / result.upper, model / result.lower, color="C0",
-                     alpha=0.25, label="data's 68 % interval")
-    low.semilogx(result.taus, model / result.adev, "o-", color="k", ms=3, lw=0.8,
-                 label="fit / data")
+    low.fill_between(result.taus, *np.clip([model / result.upper, model / result.lower],
+                                           *RATIO_RANGE), color="C0", alpha=0.25,
+                     label="data's 68 % interval")
+    if plot_ratio(low, result.taus, model / result.adev, fit.start, "k", label="fit / data"):
+        frame_ratio(low)
     low.axhline(1.0, color="0.4", lw=0.8)
     if fit.start:
         low.axvspan(result.taus[0], fit.fitted_taus[0], color="0.85",
@@ -63,7 +69,46 @@ def allan_figure(result: AllanResult, fit: NoiseFit, title: str) -> Figure:
     low.set_ylabel("fit / data")
     low.grid(True, which="both", alpha=0.3)
     legend_outside(fig)
+    wrap_title(ax, mathtext_units(f"Allan deviation and the fitted noise terms: {title}"))
     return fig
+
+
+def plot_ratio(ax: Axes, taus: np.ndarray, ratio: np.ndarray, start: int, color: str,
+               label: str | None = None) -> bool:
+    """Plot fit/data against tau in ``ax``, within :data:`RATIO_RANGE`; say if any is beyond.
+
+    Dots joined by a line; hollow before ``start`` (the taus left out of the fit); a point
+    beyond the range a triangle at its edge, pointing the way it goes, so that one far-off
+    tau does not flatten the range the fit is judged in.  With a ``label``, the dots have it
+    and the triangles :data:`BEYOND`.
+    """
+    ratio = np.asarray(ratio, dtype=float)
+    low, high = RATIO_RANGE
+    beyond = (ratio < low) | (ratio > high)
+    ax.semilogx(taus, np.where(beyond, np.nan, ratio), "-", color=color, lw=0.8)
+    fitted = np.arange(len(ratio)) >= start
+    ax.plot(taus[fitted & ~beyond], ratio[fitted & ~beyond], "o", color=color, ms=3,
+            label=label)
+    ax.plot(taus[~fitted & ~beyond], ratio[~fitted & ~beyond], "o", color=color, mfc="none",
+            ms=3)
+    for edge, side, marker in ((high, ratio > high, "^"), (low, ratio < low, "v")):
+        if side.any():
+            ax.plot(taus[side], np.full(int(side.sum()), edge), marker, color=color, ms=5,
+                    clip_on=False, label=BEYOND if label and marker == "^" else None)
+    return bool(beyond.any())
+
+
+def frame_ratio(ax: Axes) -> None:
+    """Set a fit/data panel with points beyond :data:`RATIO_RANGE` to that range, labelled.
+
+    Its edges are where the triangles of :func:`plot_ratio` sit; left to the autoscaling, a
+    band or a layout could widen it past them.
+    """
+    from matplotlib.ticker import FixedLocator
+
+    ax.set_ylim(*RATIO_RANGE)
+    low, high = RATIO_RANGE
+    ax.yaxis.set_major_locator(FixedLocator(np.arange(low, high + low / 2, low).tolist()))
 
 
 def _readoff_marks(ax: Axes, fit: NoiseFit, result: AllanResult) -> None:

@@ -61,12 +61,13 @@ from matplotlib.figure import Figure
 
 from .._version import __version__
 from ..core.exceptions import InputError
+from ..io.figures import wrap_title
 from ..io.output import path_name, save_figure, write_tables, write_text
 from ..typeset.latex import mathtext_units
 from ..typeset.summary import Summary
 from .allan import FLICKER_FLOOR, AllanResult, allan_deviation
 from .allan_fit import GAUSS_MARKOV, NoiseFit, fit_noise
-from .allan_report import write_allan
+from .allan_report import BEYOND, frame_ratio, plot_ratio, write_allan
 from .axes import SENSORS, Axis
 from .checks import GRAVITY_TOLERANCE
 from .exports import (
@@ -384,24 +385,35 @@ def _sensor_figure(axes: Sequence[AxisNoise], sensor: str) -> Figure:
     units = axes[0].axis.units
     fig = Figure(figsize=(7.5, 6.6), layout="constrained")
     top, low = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+    beyond = False
     for i, a in enumerate(axes):
         res, fit, color = a.result, a.fit, f"C{i}"
         scale = to_si_scale(sensor, a.axis.units) / to_si_scale(sensor, units)
         top.fill_between(res.taus, scale * res.lower, scale * res.upper, color=color, alpha=0.15)
-        top.loglog(res.taus, scale * res.adev, "o", color=color, ms=3, label=a.axis.column)
+        top.loglog(res.taus[fit.start:], scale * res.adev[fit.start:], "o", color=color, ms=3,
+                   label=a.axis.column)
+        top.loglog(res.taus[:fit.start], scale * res.adev[:fit.start], "o", color=color,
+                   mfc="none", ms=3)
         grid = np.geomspace(res.taus[0], res.taus[-1], 300)
         top.loglog(grid, scale * fit.model_adev(grid), "-", color=color, lw=1.0)
-        model = fit.model_adev(res.taus)
-        low.semilogx(res.taus, model / res.adev, "o-", color=color, ms=2.5, lw=0.7)
+        beyond |= plot_ratio(low, res.taus, fit.model_adev(res.taus) / res.adev, fit.start,
+                             color)
+    if any(a.fit.start for a in axes):  # one entry for every axis's hollow dots
+        top.plot([], [], "o", color="0.3", mfc="none", ms=3,
+                 label="left out of the fit (the sensor's filtering)")
     top.set_ylabel(f"Allan deviation ({mathtext_units(units)})")
-    top.set_title(f"{sensor}: overlapping Allan deviation (dots, 68 % bands) and the fitted "
-                  "IEEE Std 952 sums (lines)", fontsize="medium")
     top.grid(True, which="both", alpha=0.3)
     top.legend(fontsize="small")
     low.axhline(1.0, color="0.4", lw=0.8)
     low.set_xlabel(r"averaging time $\tau$ (s)")
     low.set_ylabel("fit / data")
     low.grid(True, which="both", alpha=0.3)
+    if beyond:  # one entry for every axis's triangles
+        low.plot([], [], "^", color="0.3", ms=5, label=BEYOND)
+        low.legend(fontsize="small")
+        frame_ratio(low)
+    wrap_title(top, f"{sensor}: overlapping Allan deviation (dots, 68 % bands) and the fitted "
+               "IEEE Std 952 sums (lines)", fontsize="medium")
     return fig
 
 

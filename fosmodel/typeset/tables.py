@@ -56,6 +56,8 @@ _CMR10 = dict(zip(
      5.28, 3.92, 3.94, 3.89, 5.56, 5.28, 7.22, 5.28, 5.28, 4.44, 5.0, 10.0, 5.0, 5.0)))
 _WIDE = 7.5  # a character outside the table: as wide as a capital
 _SUPERSCRIPT = 0.7  # a power's digits are set at 7 pt
+_TIMES, _MEDMUSKIP = 7.78, 2.22  # cmsy10's \times; 4 mu at 10 pt
+_DIGIT7, _MINUS7, _SCRIPTSPACE = 3.99, 6.25, 0.5  # a power's digit (cmr7), minus (cmsy7)
 _HEAD_UNITS = re.compile(r"^(?P<name>.*?)\s*(?P<units>\([^()]*(?:\([^()]*\)[^()]*)*\)(?:\^\S+)?)$")
 
 
@@ -125,8 +127,17 @@ def _scientific(value: float, digits: int = 4) -> Cell:
     power = int(exponent)
     if power == 0:
         return _plain_cell(mantissa, value)
-    width = text_width(mantissa) + 7.78 + text_width("10") + _SUPERSCRIPT * text_width(str(power))
-    return Cell(rf"${mantissa}\times10^{{{power}}}$", width)
+    return Cell(rf"${mantissa}\times10^{{{power}}}$", text_width(mantissa) + _times_ten(power))
+
+
+def _times_ten(power: int) -> float:
+    r"""Estimate the width (pt) of ``\times10^{power}`` in math mode.
+
+    The sign has a binary operator's space (4 mu) each side; the power is set at 7 pt (cmr7's
+    digits, cmsy7's minus, not a hyphen) and followed by ``\scriptspace``.
+    """
+    power_width = len(str(abs(power))) * _DIGIT7 + (_MINUS7 if power < 0 else 0.0) + _SCRIPTSPACE
+    return _TIMES + 2 * _MEDMUSKIP + text_width("10") + power_width
 
 
 def text_cell(value: object) -> Cell:
@@ -137,8 +148,7 @@ def text_cell(value: object) -> Cell:
         return Cell("yes" if value else "no", text_width("yes"))
     if isinstance(value, numbers.Real):  # a number among text: four significant digits
         mantissa, _, power = f"{float(value):.4g}".partition("e")
-        width = text_width(mantissa) + (7.78 + text_width("10") + _SUPERSCRIPT *
-                                         text_width(str(int(power))) if power else 0.0)
+        width = text_width(mantissa) + (_times_ten(int(power)) if power else 0.0)
         return Cell(latex_number(float(value)), width)
     text = str(value)
     return Cell(latex_text(text), text_width(text))

@@ -213,13 +213,7 @@ def _imu_at(config: FleetConfig, n: int, rate: float) -> ImuConfig:
     InputError
         A split in percent that leaves nothing to predict.
     """
-    imu = replace(config.imu, n_jobs=1)
-    if config.split is not None:
-        train_s, evaluate_s = config.split.seconds(n, rate)
-        imu = replace(imu, train_s=train_s, evaluate_s=evaluate_s)
-    if config.loop_split is not None:
-        imu = replace(imu, loop_split=config.loop_split.fractions(n, rate))
-    return imu
+    return replace(config.imu, n_jobs=1).on_record(n, rate, config.split, config.loop_split)
 
 
 def _rows(name: str, outcome: _Outcome) -> pd.DataFrame:

@@ -31,6 +31,7 @@ from ..filter.allan_statespace import allan_state_space, assemble_axes, initial_
 from ..filter.joint_noise import JointNoise, joint_noise
 from ..filter.statespace import StateSpace
 from ..io.record import Record
+from ..io.split import SplitSpec
 from ..loop.closeloop import LoopConfig, LoopResult, close_loop, loop_split
 from ..noise.axes import Axis, UnitsSpec, infer_axis, resolve_axes
 from ..noise.imu_noise import ImuNoise, imu_noise
@@ -121,6 +122,28 @@ class ImuConfig:
                            degrees=self.degrees, methods=self.methods, protocols=self.protocols,
                            train_s=self.train_s, evaluate_s=self.evaluate_s,
                            horizon_s=self.horizon_s, n_starts=self.n_starts)
+
+    def on_record(self, n: int, rate: float, split: SplitSpec | None = None,
+                  loop_split: SplitSpec | None = None) -> ImuConfig:
+        """Return this configuration with splits given in seconds or percent resolved on a record.
+
+        ``split`` sets the study's segments for a record of ``n`` samples at ``rate`` Hz
+        (None: keep ``train_s`` and ``evaluate_s``), and the loop's too unless ``loop_split``
+        gives its own (:data:`fosmodel.io.split.PROPORTIONAL`, the residual loop's default, is
+        in proportion to the record).
+
+        Raises
+        ------
+        InputError
+            A split in percent that leaves nothing to predict.
+        """
+        config = self
+        if split is not None:
+            train_s, evaluate_s = split.seconds(n, rate)
+            config = replace(config, train_s=train_s, evaluate_s=evaluate_s)
+        if loop_split is not None:
+            config = replace(config, loop_split=loop_split.fractions(n, rate))
+        return config
 
     def for_record(self, n: int, rate: float) -> ImuConfig:
         """Return this configuration with the loop's split resolved for ``n`` samples at ``rate``.

@@ -243,7 +243,7 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
              f"{result.rate:g} Hz ({duration / 3600:.3g} h); axes: "
              + ", ".join(a.axis.describe() for a in result.axes)
              + (f"; auxiliary channels of the loop: {', '.join(result.aux)}" if result.aux
-                else "") + ".", ""]
+                else "") + ".", "", split_text(result), ""]
     sections = [
         ("Noise parameters (Allan variance)", "noise",
          "IEEE Std 952 terms fitted to each axis's overlapping Allan deviation; exports for "
@@ -291,6 +291,15 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
               f"the loop of each axis, {result.config.n_jobs} at a time.", "",
               markdown_table(frame, digits=4), ""]
     return "\n".join(lines)
+
+
+def split_text(result: ImuResult) -> str:
+    """Say the split the study and the loop used: each segment's bounds and share of the record."""
+    a = result.axes[0]  # every axis is split alike
+    study, loop = a.study.split.describe(result.rate), a.loop.segments.describe(result.rate)
+    if study == loop:
+        return f"Split (the study's and the loop's): {study}."
+    return f"Split: the study's {study}; the loop's {loop}."
 
 
 def _segments(result: ImuResult) -> tuple[str, str]:
@@ -378,7 +387,8 @@ def console_summary(result: ImuResult) -> str:
                      zip(loop["30 s outage error before (m)"],
                          loop["30 s outage error after (m)"])],
     })
-    lines = [f"Noise terms (Allan), {result.config.horizon_s:g} s outage position error of "
+    lines = [textwrap.fill(split_text(result), CONSOLE_WIDTH),
+             f"Noise terms (Allan), {result.config.horizon_s:g} s outage position error of "
              "the best FOS and baseline "
              "(study),", "effects kept and outage error before -> after (loop), prediction "
              "segment:", frame.to_string(index=False)]
