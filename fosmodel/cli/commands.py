@@ -34,9 +34,10 @@ from ..noise.metrics import is_sensor_units
 from .flags import with_flags
 
 if TYPE_CHECKING:
-    from ..loop.closeloop import LoopResult
+    from ..loop.config import LoopConfig
     from ..loop.handoff import Handoff
-    from ..loop.sessions import SessionsResult
+    from ..loop.outcome import LoopOutcome
+    from ..loop.rounds import Progress
     from ..models.model import FOSModel
 
 
@@ -382,7 +383,7 @@ def close_loop(args: argparse.Namespace) -> int:
                          handoff)
 
 
-def _loop_outputs(args: argparse.Namespace, result: LoopResult | SessionsResult,
+def _loop_outputs(args: argparse.Namespace, result: LoopOutcome,
                   write_report: Callable[[Path], object], console: str, meta: dict,
                   out: Path, json_path: Path | None, model_path: Path | None,
                   names: tuple[str, str], handoff: Handoff | None = None) -> int:
@@ -413,7 +414,7 @@ def _loop_outputs(args: argparse.Namespace, result: LoopResult | SessionsResult,
 
 
 def _close_sessions(args: argparse.Namespace, recs: list[Record], channels: list[dict],
-                    config: object, say: object, title: str, out: Path,
+                    config: LoopConfig, say: Progress, title: str, out: Path,
                     json_path: Path | None, model_path: Path | None) -> int:
     """``close-loop A B C``: the loop over sessions, its report, JSON and shared model."""
     from ..loop.sessions import Session, close_sessions
@@ -425,7 +426,7 @@ def _close_sessions(args: argparse.Namespace, recs: list[Record], channels: list
             f"{r.source} {r.rate:g} Hz" for r in recs))
     sessions = [Session(r.column(args.column), ch, Path(f).stem)
                 for r, ch, f in zip(recs, channels, args.files)]
-    result = close_sessions(sessions, config, progress=say)  # type: ignore[arg-type]
+    result = close_sessions(sessions, config, progress=say)
     meta = {"column": args.column, "rate_hz": recs[0].rate,
             "fitted_on": "close-loop deciding parts of every session",
             **_sessions_meta(recs, result.constants)}

@@ -26,9 +26,9 @@ effect made one of them worse.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -42,50 +42,24 @@ from ..models.bound import BoundModel
 from .config import LoopConfig
 from .diagnose import Finding
 from .driver_forms import MIN_BLOCKS, still
-from .effects import CandidateFamily, Effect, Offer, effects_from
+from .effects import CandidateFamily, Effect
 from .effects.drift import trend_note
 from .findings import Diagnostics, residual
 from .fitting import Fitter, Judge
 from .intervals import Ratio, ratios
-from .judge import MIN_WINDOWS, Judgement
+from .judge import MIN_WINDOWS
+from .outcome import LoopOutcome
 from .record import LoopRecord
 from .roles import Roles, channel_roles
-from .rounds import Rejected, run_round
-from .scores import BeforeAfter, Plan, Scores, plan, scores
+from .rounds import REPORT_WINDOWS, Progress, Rejected, Step, run_rounds
+from .scores import Plan, Scores, plan, scores
 
-Progress = Callable[[str], None]
-#: Fewest windows of a horizon the prediction segment must hold for it to be reported (its
-#: interval needs :data:`fosmodel.loop.judge.MIN_INTERVAL_WINDOWS`; fewer read "undetermined").
-REPORT_WINDOWS = 2
+if TYPE_CHECKING:
+    from .sessions import Session, SessionsResult
 
 
 @dataclass
-class Step:
-    """One effect the loop kept: what it was, what the fit chose, why, and the errors after.
-
-    ``chosen`` holds what the fit chose of it (a channel's dead time ``lag``, a level's
-    time constant ``tau_s``).
-    """
-
-    effect: Effect
-    terms_added: list[str]
-    chosen: dict[str, Any]
-    judgement: Judgement
-    predict: Scores
-
-    @property
-    def lag(self) -> int | None:
-        """A channel's dead time: the lag of its first selected term."""
-        return self.chosen.get("lag")
-
-    @property
-    def tau_s(self) -> float | None:
-        """A level's time constant (its first selected level), or a drift's warm-up."""
-        return self.chosen.get("tau_s")
-
-
-@dataclass
-class LoopResult(BeforeAfter):
+class LoopResult(LoopOutcome):
     """Everything the loop did.
 
     ``before_scores``/``after_scores`` are the prediction-segment errors of the starting
@@ -138,10 +112,6 @@ class LoopResult(BeforeAfter):
         """
         return ratios(self.before_scores, self.after_scores, self.config.confidence)
 
-    def worse(self) -> list[str]:
-        """Return the ratios whose interval lies above 1: what the final model made worse."""
-        return [r.text() for r in self.ratios() if r.verdict == "worse"]
-
     def to_json_dict(self) -> dict[str, Any]:
         """``{"before", "after", "effects", ...}`` as the command line's JSON output holds it."""
         effects, previous = [], self.before_scores
@@ -171,10 +141,16 @@ class LoopResult(BeforeAfter):
                                for k, s in self.segments.items()}}
 
 
+@overload
+def close_loop(y: ArrayLike, channels: Mapping[str, ArrayLike] | None, config: LoopConfig,
+               progress: Progress | None = None) -> LoopResult: ...
+@overload
+def close_loop(y: Sequence[Session], channels: None, config: LoopConfig,
+               progress: Progress | None = None) -> SessionsResult: ...
 def close_loop(
-    y: ArrayLike, channels: Mapping[str, ArrayLike] | None, config: LoopConfig,
-    progress: Progress | None = None,
-) -> LoopResult:
+    y: ArrayLike | Sequence[Session], channels: Mapping[str, ArrayLike] | None,
+    config: LoopConfig, progress: Progress | None = None,
+) -> LoopResult | SessionsResult:
     """Run the residual loop on a record.
 
     Parameters
@@ -202,9 +178,9 @@ def close_loop(
     if isinstance(y, (list, tuple)) and y and all(isinstance(s, Session) for s in y):
         if channels is not None:
             raise InputError("sessions carry their own channels: give channels=None")
-        return close_sessions(y, config, progress)  # type: ignore[return-value]
+        return close_sessions(y, config, progress)
     say = progress or (lambda _: None)
-    y = as_signal(y, "the record")
+    y = as_signal(cast(ArrayLike, y), "the record")  # not sessions: checked above
     channels = as_channels(channels, list(channels or {}), len(y))
     roles = channel_roles(channels, config.sensor, config.companions, config.aux)
     record = LoopRecord.single(y, channels, config.rate)
@@ -217,44 +193,59 @@ def close_loop(
         y[segments.train], config.rate)
     clock = time.perf_counter()
     family = CandidateFamily(config.max_lag)
-    current = base = fitter.fit(family)
+    base = fitter.fit(family)
     say(f"starting model: {len(base.model.terms_)} terms ({time.perf_counter() - clock:.1f} s)")
-    diagnose = Diagnostics(record, (slice(0, segments.train.stop),), roles, config)
-    findings = findings_before = diagnose(current, family)
-    steps: list[Step] = []
-    rejected: list[Rejected] = []
-    added: list[Effect] = []
-    waiting: list[Effect] = []
-    while len(steps) < config.max_effects:
-        offer = Offer(findings, record, (segments.train,), roles, config, family, tuple(taus))
-        found = effects_from(offer)
-        candidates = [e for e in [*found, *(w for w in waiting
-                                            if not any(w.same_as(f) for f in found))]
-                      if not any(e.same_as(a) for a in added)]
-        if not candidates:
-            break
-        say(f"round {len(steps) + 1}: {len(candidates)} effect(s) to try")
-        judge = Judge(fitter, current, family, judged, added)
-        chosen, refused, waiting = run_round(fitter, judge, family, candidates, record, say,
-                                             len(steps) + 1)
-        rejected += refused
-        if chosen is None or chosen.family is None or chosen.model is None:
-            break
-        steps.append(Step(chosen.effect, _new_terms(current, chosen.model),
-                          chosen.effect.chosen(chosen.model), chosen.judgement,
-                          scores(chosen.model, y, reported, config)))
-        added.append(chosen.effect)
-        current, family = chosen.model, chosen.family
-        fitter.forget(family)
-        say(f"kept {chosen.effect.describe()}")
-        findings = diagnose(current, family)
+    layout = OneRecord(fitter, Diagnostics(record, (slice(0, segments.train.stop),), roles,
+                                           config), judged, reported)
+    done = run_rounds(layout, record, roles, config, tuple(taus), base, family, say)
+    steps, current = done.steps, done.final_model
     stop = segments.train.stop
     before = scores(base, y, reported, config)
     return LoopResult(config, segments, roles, before, steps[-1].predict if steps else before,
-                      steps, rejected, findings_before, findings, base, current, judged,
-                      reported, residual(base, y, stop), residual(current, y, stop),
-                      tuple(taus), notes(record, diagnose, family, judged, reported, roles)
+                      steps, done.rejected, done.findings_before, done.findings_after, base,
+                      current, judged, reported, residual(base, y, stop),
+                      residual(current, y, stop), tuple(taus),
+                      notes(record, layout.diagnose, done.family, judged, reported, roles)
                       + judged_notes(steps))
+
+
+class OneRecord:
+    """One record's part in the round driver (:class:`fosmodel.loop.rounds.Layout`).
+
+    Effects are fitted and offered on the fitting segment, judged on the evaluation
+    segment from several origins (:class:`~fosmodel.loop.fitting.Judge`), scored on the
+    prediction segment.
+    """
+
+    def __init__(self, fitter: Fitter, diagnose: Diagnostics, judged: Plan,
+                 reported: Plan) -> None:
+        self.fitter, self.diagnose, self.judged, self.reported = fitter, diagnose, judged, reported
+        self.fit = (fitter.train,)
+
+    def offered(self, cls: type[Effect]) -> bool:
+        """Every kind is offered on one record."""
+        return True
+
+    def round_line(self, number: int, count: int) -> str:
+        """Say the round's number and how many effects it tries."""
+        return f"round {number}: {count} effect(s) to try"
+
+    def judge(self, current: BoundModel, family: CandidateFamily,
+              added: Sequence[Effect]) -> Judge:
+        """Return the round's judge on top of ``current``."""
+        return Judge(self.fitter, current, family, self.judged, added)
+
+    def scores(self, model: BoundModel) -> tuple[Scores, list[Scores]]:
+        """Return the model's prediction-segment errors (no sessions)."""
+        return scores(model, self.fitter.record.y, self.reported, self.fitter.config), []
+
+    def findings(self, model: BoundModel, family: CandidateFamily) -> list[Finding]:
+        """Return the diagnostics of the model's residual over the fitting segment."""
+        return self.diagnose(model, family)
+
+    def forget(self, family: CandidateFamily) -> None:
+        """Drop what only other families read."""
+        self.fitter.forget(family)
 
 
 def judge_plan(segment: slice, config: LoopConfig) -> Plan:
@@ -353,7 +344,3 @@ def loop_split(n: int, config: LoopConfig) -> Split:
             f"{config.eval_horizon_s:g} s) and the prediction segment {need_pred} "
             f"({REPORT_WINDOWS} outages of {shortest:g} s)")
     return Split.by_fraction(n, config.train, config.evaluate)
-
-
-def _new_terms(old: BoundModel, new: BoundModel) -> list[str]:
-    return [t for t in new.model.terms_ if t not in set(old.model.terms_)]

@@ -11,8 +11,8 @@ from matplotlib.figure import Figure
 
 from ..io.figures import PLAIN_DECADES, fit_title, legend_outside, plain_labels
 from ..typeset.latex import mathtext_units
-from .closeloop import LoopResult
 from .diagnose import Finding
+from .outcome import LoopOutcome
 
 
 def finding_name(finding: Finding) -> str:
@@ -34,7 +34,7 @@ _SHOWN_CHANNELS = 2
 _CHANNEL_LINES = (("-.", "o"), (":", "^"))
 
 
-def residual_figure(result: LoopResult, title: str) -> Figure:
+def residual_figure(result: LoopOutcome, title: str) -> Figure:
     """Plot the residual diagnostics of the first (wide, grey) and the final (thin, blue) model.
 
     Every panel has its axes' labels; one legend below the panels; the cross-correlation
@@ -97,13 +97,13 @@ def residual_figure(result: LoopResult, title: str) -> Figure:
     return fig
 
 
-def _strongest_channels(result: LoopResult) -> list[str]:
+def _strongest_channels(result: LoopOutcome) -> list[str]:
     """Return the channels the cross-correlation panel draws, the largest correlation first."""
     largest = _largest_correlations(result)
     return sorted(largest, key=lambda channel: -largest[channel])[:_SHOWN_CHANNELS]
 
 
-def _largest_correlations(result: LoopResult) -> dict[str, float]:
+def _largest_correlations(result: LoopOutcome) -> dict[str, float]:
     """Each channel's largest ``|rho|`` over the lags, of the first or the final model."""
     largest: dict[str, float] = {}
     for f in (*result.findings_before, *result.findings_after):
@@ -222,7 +222,7 @@ def _smooth(s: np.ndarray, width: int = 25) -> np.ndarray:
                                                              mode="same")
 
 
-def _fired_text(result: LoopResult, shown: list[str]) -> str:
+def _fired_text(result: LoopOutcome, shown: list[str]) -> str:
     lines = ["tests that fire (before -> after):"]
     for b, a in zip(result.findings_before, result.findings_after):
         yes = {True: "yes", False: "no"}

@@ -9,7 +9,7 @@ import pandas as pd
 
 from ..io.output import save_figure, write_tables, write_text
 from ..typeset.markdown import markdown_table
-from .closeloop import REPORT_WINDOWS, LoopResult
+from .closeloop import LoopResult
 from .diagnose import Finding
 from .intervals import Ratio, ratios
 from .judge import (
@@ -22,7 +22,8 @@ from .judge import (
     Judgement,
 )
 from .loop_figure import finding_name, residual_figure
-from .rounds import Rejected
+from .outcome import LoopOutcome
+from .rounds import REPORT_WINDOWS, Rejected
 
 __all__ = ["CONSOLE_WIDTH", "console_summary", "describe_finding", "effects_table",
            "evaluation_text", "findings_table", "ratios_table", "report_markdown",
@@ -239,7 +240,7 @@ def better_or_worse(lead: str, found: list[Ratio], worse: list[str], where: str 
                else f"Nothing{where} is worse beyond its interval{pooled}."))
 
 
-def still_firing(result: LoopResult) -> list[str]:
+def still_firing(result: LoopOutcome) -> list[str]:
     """List the tests that still fire on the final model, each with where it fires.
 
     A driver with its lag, a periodic test with its frequency, the nonlinear test with its

@@ -7,21 +7,33 @@ that ``waits_for`` a kind (a drift, a step wait for the level and the drivers)
 is held back while one of that kind is accepted in the same round, and tried
 again in the next on top of what went in, whether or not its test still fires.
 A function of time fitted on one stretch is an extrapolation.
+
+:func:`run_rounds` is the loop over rounds, one driver for one record and for several
+sessions: what differs between them (where the effects are offered, how a trial is
+judged, how a model is scored and diagnosed) is the :class:`Layout` it is given.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Protocol
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
 
 from ..models.bound import BoundModel
-from .effects import CandidateFamily, Effect
+from .config import LoopConfig
+from .diagnose import Finding
+from .effects import CandidateFamily, Effect, Offer, effects_from
 from .judge import Judgement
 from .record import LoopRecord
+from .roles import Roles
+from .scores import Scores
 
 Progress = Callable[[str], None]
+#: Fewest windows of a horizon a prediction segment (or a session's predicted part) must
+#: hold for it to be reported (its interval needs
+#: :data:`fosmodel.loop.judge.MIN_INTERVAL_WINDOWS`; fewer read "undetermined").
+REPORT_WINDOWS = 2
 #: How a trial is judged: its model, its family and its effect give its judgement.
 Judges = Callable[[BoundModel, CandidateFamily, Effect], Judgement]
 
@@ -155,3 +167,119 @@ def verdict_text(judgement: Judgement) -> str:
                 "-" if g is None else f"{g:+.1%}" for g in earlier) + ")"
         parts.append(text)
     return head + ", ".join(parts)
+
+
+@dataclass
+class Step:
+    """One effect the loop kept: what it was, what the fit chose, why, and the errors after.
+
+    ``chosen`` holds what the fit chose of it (a channel's dead time ``lag``, a level's
+    time constant ``tau_s``); ``predict`` the predicted errors after it, pooled over the
+    sessions, and ``sessions`` each session's (empty on one record).
+    """
+
+    effect: Effect
+    terms_added: list[str]
+    chosen: dict[str, Any]
+    judgement: Judgement
+    predict: Scores
+    sessions: list[Scores] = field(repr=False, default_factory=list)
+
+    @property
+    def lag(self) -> int | None:
+        """A channel's dead time: the lag of its first selected term."""
+        return self.chosen.get("lag")
+
+    @property
+    def tau_s(self) -> float | None:
+        """A level's time constant (its first selected level), or a drift's warm-up."""
+        return self.chosen.get("tau_s")
+
+
+class Layout(Protocol):
+    """What the round driver asks of the data: one record's, or several sessions'.
+
+    ``fit`` is where the effects are fitted and offered (the fitting segment, or each
+    session's deciding part), ``fitter`` fits a family there.
+    """
+
+    @property
+    def fitter(self) -> Fits:
+        """What fits a candidate family where the effects are fitted."""
+
+    @property
+    def fit(self) -> tuple[slice, ...]:
+        """Where the effects are fitted and offered."""
+
+    def offered(self, cls: type[Effect]) -> bool:
+        """Say whether the kind ``cls`` may be offered (several sessions: the pooled ones)."""
+
+    def round_line(self, number: int, count: int) -> str:
+        """Return the progress line of a round of ``count`` candidates."""
+
+    def judge(self, current: BoundModel, family: CandidateFamily,
+              added: Sequence[Effect]) -> Judges:
+        """Return the judge of a round on top of ``current``, whose effects are ``added``."""
+
+    def scores(self, model: BoundModel) -> tuple[Scores, list[Scores]]:
+        """Return the model's predicted errors: pooled, and each session's (or none)."""
+
+    def findings(self, model: BoundModel, family: CandidateFamily) -> list[Finding]:
+        """Return the diagnostics of the model's residual where it was fitted."""
+
+    def forget(self, family: CandidateFamily) -> None:
+        """Drop what only other families than ``family`` read."""
+
+
+@dataclass
+class Rounds:
+    """What the rounds did: the kept steps, the rejected, the final model and its findings."""
+
+    steps: list[Step]
+    rejected: list[Rejected]
+    findings_before: list[Finding]
+    findings_after: list[Finding]
+    final_model: BoundModel
+    family: CandidateFamily
+
+
+def run_rounds(layout: Layout, record: LoopRecord, roles: Roles, config: LoopConfig,
+               taus: tuple[float, ...], base: BoundModel, family: CandidateFamily,
+               say: Progress) -> Rounds:
+    """Run the loop's rounds from ``base``: offer, judge, keep the best, until none survives.
+
+    Each round offers the effects the fired findings point to, with those that wait
+    from the round before (none that is in already), and runs :func:`run_round`; it
+    stops when none is left, none is kept or ``config.max_effects`` are in.
+    """
+    current = base
+    findings = findings_before = layout.findings(current, family)
+    steps: list[Step] = []
+    rejected: list[Rejected] = []
+    added: list[Effect] = []
+    waiting: list[Effect] = []
+    while len(steps) < config.max_effects:
+        offer = Offer(findings, record, layout.fit, roles, config, family, taus)
+        found = effects_from(offer, keep=layout.offered)
+        candidates = [e for e in [*found, *(w for w in waiting
+                                            if not any(w.same_as(f) for f in found))]
+                      if not any(e.same_as(a) for a in added)]
+        if not candidates:
+            break
+        say(layout.round_line(len(steps) + 1, len(candidates)))
+        judge = layout.judge(current, family, added)
+        chosen, refused, waiting = run_round(layout.fitter, judge, family, candidates, record,
+                                             say, len(steps) + 1)
+        rejected += refused
+        if chosen is None or chosen.family is None or chosen.model is None:
+            break
+        pooled, each = layout.scores(chosen.model)
+        steps.append(Step(chosen.effect, [t for t in chosen.model.model.terms_
+                                          if t not in set(current.model.terms_)],
+                          chosen.effect.chosen(chosen.model), chosen.judgement, pooled, each))
+        added.append(chosen.effect)
+        current, family = chosen.model, chosen.family
+        layout.forget(family)
+        say(f"kept {chosen.effect.describe()}")
+        findings = layout.findings(current, family)
+    return Rounds(steps, rejected, findings_before, findings, current, family)

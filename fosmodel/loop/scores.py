@@ -71,46 +71,6 @@ class Scores:
                 "terms": list(self.terms)}
 
 
-class BeforeAfter:
-    """A loop's result as numbers: its starting and its final model's scores, as JSON.
-
-    Mixed into :class:`fosmodel.loop.closeloop.LoopResult` and the sessions' result, whose
-    ``before_scores`` and ``after_scores`` they are.
-    """
-
-    before_scores: Scores
-    after_scores: Scores
-    steps: Sequence[object]
-    base_model: BoundModel
-    final_model: BoundModel
-
-    def worse(self) -> list[str]:
-        """Return the ratios whose interval lies above 1: what the final model made worse."""
-        raise NotImplementedError
-
-    def handed_on(self) -> tuple[BoundModel, str]:
-        """Return the model to save or export, and which it is in words.
-
-        The final model, or the starting one when the effects kept made the prediction
-        segment worse beyond an interval: the loop never hands on a model that makes
-        unseen data worse.  ``close-loop --model`` and ``imu`` save the same one.
-        """
-        if self.steps and self.worse():
-            return self.base_model, ("the loop's starting model (its effects made the "
-                                     "prediction segment worse)")
-        return self.final_model, "the loop's final model"
-
-    @property
-    def before(self) -> dict[str, Any]:
-        """The starting model's numbers (:meth:`Scores.to_dict`)."""
-        return self.before_scores.to_dict()
-
-    @property
-    def after(self) -> dict[str, Any]:
-        """The final model's numbers."""
-        return self.after_scores.to_dict()
-
-
 @dataclass(frozen=True)
 class Plan:
     """Where a segment's numbers are taken: its windows per horizon, and why any is left out.

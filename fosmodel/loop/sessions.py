@@ -33,7 +33,7 @@ may share are offered (``pooled``).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -49,20 +49,17 @@ from ..models.sessions import fit_sessions, session_constant
 from .config import LoopConfig
 from .diagnose import Finding
 from .driver_forms import refit_forms, still
-from .effects import CandidateFamily, Effect, Offer, effects_from
+from .effects import CandidateFamily, Effect
 from .effects.drift import trend_note
 from .findings import Diagnostics
 from .fitting import FamilyArrays, _holds
 from .intervals import Ratio, ratios
 from .judge import MIN_WINDOWS, Forecasts, Judgement, compare, forecasts, verdict
+from .outcome import LoopOutcome
 from .record import LoopRecord
 from .roles import Roles, channel_roles
-from .rounds import Rejected, run_round
-from .scores import BeforeAfter, Outages, Plan, Scores, plan, scores
-
-Progress = Callable[[str], None]
-#: Fewest windows of a horizon a session's predicted part must hold for it to be reported.
-REPORT_WINDOWS = 2
+from .rounds import REPORT_WINDOWS, Progress, Rejected, Step, run_rounds
+from .scores import Outages, Plan, Scores, plan, scores
 
 
 @dataclass(frozen=True)
@@ -208,19 +205,7 @@ def _pool(parts: list[Forecasts]) -> Forecasts:
 
 
 @dataclass
-class SessionStep:
-    """One effect kept over the sessions, with each session's predicted errors after it."""
-
-    effect: Effect
-    terms_added: list[str]
-    chosen: dict[str, Any]
-    judgement: Judgement
-    predict: Scores
-    sessions: list[Scores] = field(repr=False, default_factory=list)
-
-
-@dataclass
-class SessionsResult(BeforeAfter):
+class SessionsResult(LoopOutcome):
     """Everything the loop did over several sessions.
 
     ``before``/``after`` are the starting and final model's predicted errors, pooled over
@@ -235,7 +220,7 @@ class SessionsResult(BeforeAfter):
     after_scores: Scores
     before_sessions: list[Scores]
     after_sessions: list[Scores]
-    steps: list[SessionStep]
+    steps: list[Step]
     rejected: list[Rejected]
     findings_before: list[Finding]
     findings_after: list[Finding]
@@ -253,13 +238,6 @@ class SessionsResult(BeforeAfter):
             return ratios(self.before_scores, self.after_scores, self.config.confidence)
         return ratios(self.before_sessions[session], self.after_sessions[session],
                       self.config.confidence)
-
-    def worse(self) -> list[str]:
-        """Return what the final model made worse beyond its interval, pooled over the sessions.
-
-        The verdict is the pooled one; :meth:`worse_in` says it of each session.
-        """
-        return [r.text() for r in self.ratios() if r.verdict == "worse"]
 
     def worse_in(self, session: int) -> list[str]:
         """Return what the final model made worse beyond its interval in one session."""
@@ -319,61 +297,72 @@ def close_sessions(sessions: Sequence[Session], config: LoopConfig,
         np.concatenate([record.y[p] for p in decide]), config.rate)
     family = CandidateFamily(config.max_lag)
     clock = time.perf_counter()
-    current = base = fitter.fit(family)
+    base = fitter.fit(family)
     say(f"starting model: {len(base.model.terms_)} terms, shared by {len(names)} sessions "
         f"({time.perf_counter() - clock:.1f} s)")
-    diagnose = Diagnostics(record, decide, roles, config)
-
-    def findings_of(model: BoundModel, fam: CandidateFamily) -> list[Finding]:
-        residuals = []
-        for k, part in enumerate(decide):
-            bound, rel = fitter.session(model, k), _relative(part, record.sessions[k])
-            y = record.y[record.sessions[k]][: rel.stop]
-            residuals.append((y - bound.predict(y))[rel][model.lag_window_:])
-        return diagnose.of(residuals, model.lag_window_, fam)
-
-    findings = findings_before = findings_of(current, family)
-    steps: list[SessionStep] = []
-    rejected: list[Rejected] = []
-    added: list[Effect] = []
-    waiting: list[Effect] = []
-    while len(steps) < config.max_effects:
-        offer = Offer(findings, record, decide, roles, config, family, tuple(taus))
-        found = effects_from(offer, keep=lambda cls: cls.pooled)
-        candidates = [e for e in [*found, *(w for w in waiting
-                                            if not any(w.same_as(f) for f in found))]
-                      if not any(e.same_as(a) for a in added)]
-        if not candidates:
-            break
-        say(f"round {len(steps) + 1}: {len(candidates)} effect(s) to try, each judged on "
-            f"every session held out")
-        judge = SessionJudge(fitter, family, judged, head, ahead)
-        chosen, refused, waiting = run_round(fitter, judge,
-                                             family, candidates, record, say, len(steps) + 1)
-        rejected += refused
-        if chosen is None or chosen.family is None or chosen.model is None:
-            break
-        each = _scores(fitter, chosen.model, reported, config)
-        steps.append(SessionStep(chosen.effect, [t for t in chosen.model.model.terms_
-                                                 if t not in set(current.model.terms_)],
-                                 chosen.effect.chosen(chosen.model), chosen.judgement,
-                                 _pool_scores(each), each))
-        added.append(chosen.effect)
-        current, family = chosen.model, chosen.family
-        fitter.forget(family)
-        ahead.fitter.forget(family)
-        say(f"kept {chosen.effect.describe()}")
-        findings = findings_of(current, family)
+    layout = ManySessions(fitter, Diagnostics(record, decide, roles, config), judged,
+                          reported, head, ahead)
+    done = run_rounds(layout, record, roles, config, tuple(taus), base, family, say)
+    current = done.final_model
     before = _scores(fitter, base, reported, config)
-    after = steps[-1].sessions if steps else before
+    after = done.steps[-1].sessions if done.steps else before
     constants = [session_constant(current.model, record.y[s], {k: v[s] for k, v in
                                                                 current.inputs.items()},
                                   _relative(p, s))
                  for s, p in zip(record.sessions, decide)]
     return SessionsResult(config, names, roles, _pool_scores(before), _pool_scores(after),
-                          before, after, steps, rejected, findings_before, findings, base,
-                          current, constants, judged, reported, tuple(taus),
-                          _notes(record, diagnose, fitter, family, roles, judged, names))
+                          before, after, done.steps, done.rejected, done.findings_before,
+                          done.findings_after, base, current, constants, judged, reported,
+                          tuple(taus), _notes(record, layout.diagnose, fitter, done.family,
+                                              roles, judged, names))
+
+
+class ManySessions:
+    """Several sessions' part in the round driver (:class:`fosmodel.loop.rounds.Layout`).
+
+    Effects are fitted and offered on each session's deciding part (the kinds several
+    sessions may share only), judged leave-one-session-out (:class:`SessionJudge`), scored
+    on each session's predicted part and pooled.
+    """
+
+    def __init__(self, fitter: SessionFitter, diagnose: Diagnostics, judged: list[Plan],
+                 reported: list[Plan], head: int, ahead: Ahead) -> None:
+        self.fitter, self.diagnose, self.judged, self.reported = fitter, diagnose, judged, reported
+        self.head, self.ahead = head, ahead
+        self.fit = fitter.decide
+
+    def offered(self, cls: type[Effect]) -> bool:
+        """Only the kinds several sessions may share (``pooled``)."""
+        return cls.pooled
+
+    def round_line(self, number: int, count: int) -> str:
+        """Say the round's number, how many effects it tries, and how each is judged."""
+        return (f"round {number}: {count} effect(s) to try, each judged on every session "
+                f"held out")
+
+    def judge(self, current: BoundModel, family: CandidateFamily,
+              added: Sequence[Effect]) -> SessionJudge:
+        """Return the round's leave-one-session-out judge against ``family``."""
+        return SessionJudge(self.fitter, family, self.judged, self.head, self.ahead)
+
+    def scores(self, model: BoundModel) -> tuple[Scores, list[Scores]]:
+        """Return the model's predicted errors, pooled and each session's."""
+        each = _scores(self.fitter, model, self.reported, self.fitter.config)
+        return _pool_scores(each), each
+
+    def findings(self, model: BoundModel, family: CandidateFamily) -> list[Finding]:
+        """Return the diagnostics of the sessions' residuals over their deciding parts."""
+        record, residuals = self.fitter.record, []
+        for k, part in enumerate(self.fit):
+            bound, rel = self.fitter.session(model, k), _relative(part, record.sessions[k])
+            y = record.y[record.sessions[k]][: rel.stop]
+            residuals.append((y - bound.predict(y))[rel][model.lag_window_:])
+        return self.diagnose.of(residuals, model.lag_window_, family)
+
+    def forget(self, family: CandidateFamily) -> None:
+        """Drop what only other families read, here and in the fitter ahead."""
+        self.fitter.forget(family)
+        self.ahead.fitter.forget(family)
 
 
 def score_sessions(sessions: Sequence[Session], config: LoopConfig,

@@ -72,7 +72,7 @@ def sessions_markdown(result: SessionsResult, title: str, table: pd.DataFrame,
     lines += rejected_section(result.rejected)
     lines += ["## Diagnostics of the first and the final model", "",
               markdown_table(diagnostics, digits=3), ""]
-    firing = still_firing(result)  # type: ignore[arg-type]
+    firing = still_firing(result)
     if firing:
         lines += [f"Still firing at the end: {', '.join(firing)}.", ""]
     if result.notes:
@@ -102,8 +102,7 @@ def write_sessions_report(result: SessionsResult, out_dir: Path, title: str) -> 
                          report=title)
     paths += write_tables(diagnostics, out_dir, "diagnostics",
                           f"Residual loop over sessions, {title}: diagnostics", report=title)
-    paths += save_figure(residual_figure(result, title), out_dir,  # type: ignore[arg-type]
-                         "residual")
+    paths += save_figure(residual_figure(result, title), out_dir, "residual")
     paths.append(out_dir / "report.md")
     write_text(paths[-1], sessions_markdown(result, title, table, diagnostics))
     return paths
