@@ -1,4 +1,5 @@
-"""Which error model to hand a filter: GM, AR, FOS, the Allan model and the FOS filter model.
+"""Which error model to hand a filter: GM, AR, FOS, the Allan model, the FOS filter model and
+the loop's final model.
 
 Every model is judged in the aided filter a navigator runs (:mod:`fosmodel.filter.aided`): on
 data it was not fitted on, position fixes of standard deviation 0.1 m in update/prediction
@@ -27,8 +28,9 @@ Models, each fitted on the first half: the 1st-order Gauss-Markov, AR(4) by Burg
 (L chosen among 4..10 as ``kalman_static.py`` does), the three-term Allan model
 (:func:`~fosmodel.filter.allan_statespace.allan_state_space`), the FOS filter model
 (:class:`~fosmodel.filter.fos_filter.FOSFilterModel`, given the temperature where the record
-has one), and an oracle: the Allan model fitted on the *filtered* half (the training half's
-mean kept), the bound of what a model of these terms fitted elsewhere can do.
+has one), the loop's final model (:func:`fit_loop`), and an oracle: the Allan model fitted
+on the *filtered* half (the training half's mean kept), the bound of what a model of these
+terms fitted elsewhere can do.
 
 Per axis, cycle and model: the RMS position estimation error, the filter's sigma over it, the
 NEES, and the RMS over the Allan model's.  Tables go to ``studies/results/kalman_real/``
@@ -68,6 +70,7 @@ from fosmodel.filter import (
     to_state_space,
 )
 from fosmodel.io import load_mpu6050_static, load_record, save_figure, write_tables
+from fosmodel.loop import LoopConfig, close_loop, refit_on_all
 from fosmodel.models import ARModel, GaussMarkovModel
 from fosmodel.noise import STANDARD_GRAVITY, allan_deviation, fit_noise
 from fosmodel.typeset import markdown_table
@@ -79,9 +82,9 @@ JOBS = int(sys.argv[sys.argv.index("--jobs") + 1]) if "--jobs" in sys.argv else 
 SIGMA_M = 0.1
 CYCLES_S = (30, 60, 120, 600)
 SEED = 0
-GM, AR, FOS, ALLAN, FFM, ORACLE = ("1st-order GM", "AR(4) Burg", "FOS", "Allan",
-                                   "FOS filter", "Oracle Allan")
-MODELS = (GM, AR, FOS, ALLAN, FFM, ORACLE)
+GM, AR, FOS, ALLAN, FFM, LOOPM, ORACLE = ("1st-order GM", "AR(4) Burg", "FOS", "Allan",
+                                          "FOS filter", "Loop final", "Oracle Allan")
+MODELS = (GM, AR, FOS, ALLAN, FFM, LOOPM, ORACLE)
 CONSISTENT = (0.7, 1.5)  # the issue's band for the filter's sigma over its actual RMS
 DEG = np.pi / 180.0
 ADIS_COLUMNS = ("gx_dps", "gy_dps", "gz_dps", "ax_g", "ay_g", "az_g")
@@ -195,8 +198,32 @@ def fit_axis(a: Axis) -> dict:
     inputs = (res.input_matrix({"temp_c": a.temp[half:]}, len(test)) if res.drivers
               else None)
     out[FFM] = (res.to_state_space(), res.initial_covariance(), inputs)
+    out[LOOPM], out["_loop"] = fit_loop(a, units)
     out["_fos_lag"], out["_ffm"] = lag, res
     return out
+
+
+def fit_loop(a: Axis, units: str) -> tuple[tuple | None, str]:
+    """The loop's final model, as ``close-loop --model`` hands it on, fitted on the first half.
+
+    The loop runs on the first half alone (its own fitting, evaluation and prediction
+    segments inside it, the temperature its one channel where measured), the model it hands
+    on is refitted on that whole half, and its state space starts from
+    :func:`initial_covariance`.  None, with the reason, where the loop refuses the record or
+    keeps terms no linear filter holds (written for an EKF, not judged here).
+    """
+    half = len(a.y) // 2
+    channels = {} if a.temp is None else {"temp_c": a.temp[:half]}
+    try:
+        res = close_loop(a.y[:half], channels, LoopConfig(rate=a.rate, sensor=a.sensor,
+                                                         units=units))
+        error = to_state_space(refit_on_all(res, a.y[:half]))
+    except InputError as exc:
+        return None, str(exc).split(";")[0]
+    kept = "; ".join(s.effect.describe() for s in res.steps) or "none"
+    full = {} if a.temp is None else {"temp_c": a.temp}
+    inputs = error.input_matrix(full, len(a.y))[half:] if error.n_inputs else None
+    return (error, initial_covariance(error, half), inputs), kept
 
 
 # -- the filters -----------------------------------------------------------------------------
@@ -255,8 +282,11 @@ def run_filters(axes: list[Axis]) -> pd.DataFrame:
                 if made is None:
                     continue
                 error, p0, inputs = made
+                # a compensation is the model's feedthrough D: the client subtracts it
+                reading = test if inputs is None or not error.D.any() else \
+                    test - inputs @ error.D[0]
                 keys.append((a, cycle, name))
-                jobs.append((a.sensor, error, p0, test, noise, cycle, 1.0 / a.rate, inputs))
+                jobs.append((a.sensor, error, p0, reading, noise, cycle, 1.0 / a.rate, inputs))
     with ProcessPoolExecutor(JOBS) as pool:
         runs = list(pool.map(run_one, jobs, chunksize=8))
     rows = [{"Group": a.group, "Record": a.record, "Axis": a.axis, "Sensor": a.sensor,
@@ -334,7 +364,9 @@ def fos_filter_axes(axes: list[Axis]) -> pd.DataFrame:
                      "Drivers": ", ".join(f"{d.name}: {d.coef:.3g}" for d in res.drivers)
                      or "-", "FOS L": a.fits["_fos_lag"],
                      "Unstable fits left out": ", ".join(
-                         n for n in (GM, AR, FOS) if a.fits[n] is None) or "-"})
+                         n for n in (GM, AR, FOS) if a.fits[n] is None) or "-",
+                     "Loop final model": (a.fits["_loop"] if a.fits[LOOPM] is not None
+                                          else f"not in the filter: {a.fits['_loop']}")})
     return pd.DataFrame(rows)
 
 
@@ -424,7 +456,11 @@ def verdict(frame: pd.DataFrame, axes: list[Axis]) -> list[str]:
     longest = driven[driven["Cycle [s]"] == driven.groupby(["Record", "Axis"])["Cycle [s]"]
                      .transform("max")]
     gained = longest[longest["RMS / Allan"] <= 0.5]
-    fitted = med.drop([ALLAN, ORACLE], level=0)
+    fitted = med.drop([ALLAN, ORACLE, LOOPM], level=0)
+    loop = real[real["Model"] == LOOPM]
+    loop_in = loop["Sigma / RMS"].between(lo, hi)
+    n_real = len({(a.record, a.axis) for a in axes if a.group == "real"})
+    n_loop = len(loop.groupby(["Record", "Axis"]))
     return [
         f"On the real axes the FOS filter model's median RMS is {_span(med[FFM])} times the "
         f"Allan model's over the cycles (at or below it on {share:.0f} % of {len(ffm)} "
@@ -438,6 +474,15 @@ def verdict(frame: pd.DataFrame, axes: list[Axis]) -> list[str]:
         f"outside, {int(above.sum())} claim more error than they make, "
         f"{int((above & (ffm['Cycle [s]'] == max(CYCLES_S))).sum())} of those at the "
         f"{max(CYCLES_S) // 60}-min cycle, where its random walk dominates what it claims.",
+        "",
+        f"The loop's final model (fitted on the first half by the loop, refitted there on "
+        f"all of it, as `close-loop --model` writes it) is in the filter on {n_loop} of "
+        f"{n_real} real axes"
+        + (" (the others keep terms only an EKF holds, or the loop refused the half: "
+           "`fos_filter_axes`)" if n_loop < n_real else "")
+        + f": its median RMS is {_span(med[LOOPM])} times the "
+        f"Allan model's over the cycles, its sigma over RMS in {lo:g}-{hi:g} on "
+        f"{int(loop_in.sum())} of {len(loop)} axis-cycles ({_span(loop['Sigma / RMS'])}).",
         "",
         f"A driver was kept on {len(kept)} of {len(axes)} axes ("
         + ", ".join(f"{a.record} {a.axis}" for a in kept) + "). At the longest cycle the FOS "
