@@ -683,3 +683,22 @@ def test_units_are_read_from_the_column_names(tmp_path):
                          "ay_g": "g", "temp_c": "degC"}
     scaled = load_record(path, scale={"gy_dps": 0.5})  # scaled: its units are no longer known
     assert "gy_dps" not in scaled.units and scaled.units["gx_rads"] == "rad/s"
+
+
+def test_clip_bounds_the_spikes_and_leaves_a_slow_excursion_as_it_is(tmp_path):
+    # the warm-up above with two one-sample glitches in its still part: outliers="clip" brings
+    # the glitches to the bounds and leaves every sample of the warm-up as read
+    t = np.arange(360_000) / 100.0
+    temp = np.round(40.0 - 15.0 * np.exp(-t / 600.0)
+                    + np.random.default_rng(4).normal(0, 0.02, t.size), 2)
+    temp[[200_000, 300_000]] = [90.0, -10.0]
+    rec = load_record(_write(tmp_path, {"time": t, "temp_c": temp}), outliers="clip")
+    out = rec.outliers["temp_c"]
+    assert sorted(out.tolist()) == [200_000, 300_000]
+    clipped = rec.column("temp_c")
+    low, high = _bounds(temp)
+    assert clipped[200_000] == pytest.approx(high) and clipped[300_000] == pytest.approx(low)
+    others = np.ones(t.size, dtype=bool)
+    others[[200_000, 300_000]] = False
+    np.testing.assert_array_equal(clipped[others], temp[others])  # the warm-up too
+    assert clipped[0] < low  # the warm-up's start lies beyond the bounds, kept

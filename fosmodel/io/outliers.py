@@ -168,8 +168,10 @@ def handle_outliers(record: Record, found: dict[str, Outliers], mode: str,
         record.notes.append(
             f"column {name!r}: {out.samples.size} outlier(s) ({rule}, outside {bounds}) at "
             f"{positions(out.samples, first_line)}; {done}")
-        if mode == "clip":
-            record.data[name] = np.clip(record.data[name], out.low, out.high)
+        if mode == "clip":  # the outliers only: a slow excursion beside them is the signal
+            x = np.array(record.data[name], dtype=float)
+            x[out.samples] = np.clip(x[out.samples], out.low, out.high)
+            record.data[name] = x
     if mode == "drop":
         _drop_rows(record, np.unique(np.concatenate([o.samples for o in found.values()])))
 
