@@ -198,3 +198,12 @@ def test_the_loop_takes_a_split_of_its_own_when_asked(imu_csv):
     config = ImuConfig().on_record(30_000, 100.0, args.split, args.loop_split)
     assert (config.train_s, config.evaluate_s) == (150.0, 60.0)
     assert config.loop_split == (0.2, 0.1)
+
+
+def test_allan_s_shortest_tau_is_a_duration_as_imu_s():
+    from fosmodel.cli.parser import build_parser
+
+    for command in (["allan", "--column", "gx"], ["imu"]):
+        base = [*command, "x.csv", "--out", "o", "--min-tau"]
+        assert build_parser().parse_args([*base, "0.5s"]).min_tau == 0.5
+        assert build_parser().parse_args([*base, "2"]).min_tau == 2.0

@@ -397,3 +397,15 @@ def test_the_loop_figure_puts_a_power_of_ten_in_the_label_not_over_it(tmp_path):
         for axis in (ax.xaxis, ax.yaxis):
             assert axis.get_offset_text().get_text() == "", (ax.get_title(), axis)
     assert figure_problems(fig) == []
+
+
+def test_no_empty_decade_before_the_taus_left_out():
+    """The shading of the left-out taus starts at the first tau, 0.01 s: a tick a rounding
+    above 0.01 was taken for one that does not label it, and the axis widened to 0.001."""
+    from data_synth import make_scenario
+
+    y = make_scenario("static_imu", duration=900.0, seed=0).columns["ax_mps2"]
+    result = allan_deviation(y, 100.0, units="m/s^2", sensor="accel")
+    fig = allan_figure(result, fit_noise(result, min_tau=2.0), "x.csv.gz: ax")
+    tidy(fig)
+    assert fig.axes[1].get_xlim()[0] > result.taus[0] / 2

@@ -197,8 +197,8 @@ def test_the_command_line_on_a_log(tmp_path, capsys):
 
 
 @needs_logs
-@pytest.mark.parametrize("settings, least", [([], "420 s"), (["--split", "20%,20%", "--horizon",
-                                                               "5"], "100 s")])
+@pytest.mark.parametrize("settings, least", [([], "199.996 s"),  # 30 % left for 60 s of windows
+                                             (["--split", "20%,20%", "--horizon", "5"], "100 s")])
 def test_a_log_too_short_for_the_workflow_is_told_its_least_length_at_once(settings, least,
                                                                           tmp_path, capsys):
     """One message with the least length these settings take and what to change, before any

@@ -15,6 +15,7 @@ from .arguments import (
     UNITS_HELP,
     add_loader_options,
     add_window_options,
+    duration,
     durations,
     exog_arg,
     inflation,
@@ -172,9 +173,10 @@ def build_parser() -> argparse.ArgumentParser:
     allan.add_argument("--accel-units", metavar="UNITS",
                        help="units of the accelerometer columns --units and the names do not "
                             "give (m/s^2, g, mg)")
-    allan.add_argument("--min-tau", type=positive_float,
-                       help="shortest averaging time fitted, in s (default: found from the "
-                            "curve, leaving out taus bent by the sensor's own filtering)")
+    allan.add_argument("--min-tau", type=duration,
+                       help="shortest averaging time fitted, e.g. 0.1s (a bare number is in "
+                            "seconds; default: found from the curve, leaving out taus bent by "
+                            "the sensor's own filtering)")
     allan.add_argument("--static-only", action="store_true", help=STATIC_ONLY_HELP)
     allan.add_argument("--inflate", type=inflation, default="1", metavar="K",
                        help=INFLATE_HELP + " (with --columns)")

@@ -109,8 +109,9 @@ def _bracket(ax: Axes, axis: Axis, name: str) -> bool:
     # autoscaled within a decade) is bracketed too
     ticks = [t for t in axis.get_major_locator().tick_values(min(low, first), max(high, last))
              if np.isfinite(t) and (t > 0 or axis.get_scale() != "log")]
-    below = max((t for t in ticks if t <= first), default=low)
-    above = min((t for t in ticks if t >= last), default=high)
+    # a tick computed as 0.010000000000000002 still labels a curve starting at 0.01
+    below = max((t for t in ticks if t <= first + 1e-9 * abs(first)), default=low)
+    above = min((t for t in ticks if t >= last - 1e-9 * abs(last)), default=high)
     new = (min(low, below), max(high, above))
     if new == (low, high):
         return False
