@@ -30,7 +30,7 @@ thread's): on a machine shared with other work the wall times also hold the
 time a process waited for a core.
 
 Table 2, FOS against Burg at the same order L = 1, 5, 10, 20 on 36,000 samples of
-an AR(4) process (seed 000 models accelerometer errors as AR(4); the weights
+an AR(4) process (Park 2004, models accelerometer errors as AR(4); the weights
 here are our choice) and of the first 3 minutes of the paper-like accelerometer
 record of ``data_synth``.  Burg (``burg(y, L)``) has no cross-products, so FOS with
 CP = 1 and CP = 2 at lag L are both set against Burg at order L.  FOS runs with

@@ -1,6 +1,6 @@
-"""Noise shared across columns: the gyros of an array (seed 004), the axes of one IMU.
+"""Noise shared across columns: the gyros of an array (Koldbæk and Totu 2011), the axes of one IMU.
 
-Seed 004 (sections 6.5-6.6) models an array of same-board MEMS gyros whose
+Koldbæk and Totu (2011) (sections 6.5-6.6) models an array of same-board MEMS gyros whose
 white noises are correlated at equal times: equicorrelated with a factor
 ``rho`` (``-1/(m-1) <= rho <= 1`` for ``m`` sensors, eq. 6.38) or with a given
 correlation matrix.  :class:`CorrelatedWhiteNoise` (ARW),
@@ -112,7 +112,7 @@ class CorrelatedRandomWalk(_ArrayNoise):
     """Rate random walks (RRW) on several columns driven by correlated white noise.
 
     ``densities[j]`` is ``K_j`` in ``[unit]/sqrt(s)``; the increments of all
-    columns at one sample have the correlation ``corr`` (seed 004 eq. 6.36).
+    columns at one sample have the correlation ``corr`` (Koldbæk and Totu 2011, eq. 6.36).
     """
 
     kind: ClassVar[str] = "correlated_random_walk"

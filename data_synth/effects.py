@@ -73,7 +73,7 @@ class TurnOnBias(Source):
 class ScaleFactorError(Source):
     """Scale-factor error ``scale * u[n]`` under the true rate or specific force column ``input``.
 
-    ``scale`` is a fraction (seed 000 Table 4.2: -0.3984 % is ``-0.003984``).
+    ``scale`` is a fraction (Park 2004, Table 4.2: -0.3984 % is ``-0.003984``).
     """
 
     scale: float

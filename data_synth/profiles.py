@@ -6,7 +6,7 @@ plus a room cycle.  Temperature-driven effects then read that column.
 
 * :class:`WarmUp` -- exponential warm-up of the sensor after power-on;
 * :class:`StepProfile` -- held levels with a first-order lag: thermal-chamber
-  steps from -30 to +60 C (seed 001) or rate-table steps (seed 000 Fig. 4.7);
+  steps from -30 to +60 C (El-Diasty et al. 2007) or rate-table steps (Park 2004, Fig. 4.7);
 * :class:`RoomCycle` -- slow periodic room temperature cycle;
 * :class:`Sweep` -- slow piecewise-linear sweeps with flat stretches (a day-long
   session warming from 5 C, held, cooled...).
@@ -23,7 +23,7 @@ from scipy.signal import lfilter
 
 from data_synth.base import Source, as_float_tuple
 
-#: Thermal-chamber set points of seed 001: -30 to +60 C every 10 C.
+#: Thermal-chamber set points of El-Diasty et al. (2007): -30 to +60 C every 10 C.
 CHAMBER_LEVELS_C: tuple[float, ...] = tuple(float(t) for t in range(-30, 61, 10))
 
 

@@ -2,22 +2,22 @@
 
 Parameter provenance (seeds in /work/shared/seeds):
 
-* Crossbow CC-300-class (AHRS300CC) noise: seed 001 Table 1, mean over the four
+* Crossbow CC-300-class (AHRS300CC) noise: El-Diasty et al. (2007) Table 1, mean over the four
   chamber temperatures: gyro-Y ARW 2.8946 deg/sqrt(h), accelerometer-Y VRW
   0.2797 m/s/sqrt(h); per-temperature values for the chamber records.
-* Biases and scale factors: seed 000 Tables 4.1/4.2 (RGA300CA, Crossbow):
+* Biases and scale factors: Park (2004) Tables 4.1/4.2 (RGA300CA, Crossbow):
   accelerometer-Y bias 2.4233 mg, yaw-gyro bias 0.2813 deg/s and scale-factor
   error -0.3984 %; resolutions (quantization LSB) 1 mg and 0.025 deg/s and the
-  rate-table sequence 0 -> 80 -> -80 -> 0 deg/s in 10 deg/s steps from seed 000
+  rate-table sequence 0 -> 80 -> -80 -> 0 deg/s in 10 deg/s steps from Park (2004)
   Table 5.4 and section 4.3.
-* Gyro array: seed 004 Table 5.1 (ADIS16265 board at 102.4 Hz), per-gyro ARW in
+* Gyro array: Koldbæk and Totu (2011) Table 5.1 (ADIS16265 board at 102.4 Hz), per-gyro ARW in
   deg/sqrt(s) and RRW in deg/sqrt(s^3); typical values 0.068 / 0.00029 (eq. 5.4);
   equicorrelation as in eq. 6.36 (uncorrelated by default, the thesis' working
   assumption for separately packaged sensors).
-* Chamber: seed 001, -30 to +60 C every 10 C, 100 Hz.
+* Chamber: El-Diasty et al. (2007), -30 to +60 C every 10 C, 100 Hz.
 
 Values not given by the seeds are design choices, stated where they are set:
-the higher-order Gauss-Markov component of the paper records (seed 002 Fig. 2
+the higher-order Gauss-Markov component of the paper records (Tamazin et al. 2013, Fig. 2
 shows its shape, not its size), bias instabilities, temperature coefficients,
 and the effect sizes of the residual-loop scenarios (chosen so that 5 minutes
 at 100 Hz show each effect well above the estimation noise while it stays a
@@ -88,18 +88,18 @@ from data_synth.units import (
 )
 from fosmodel.core.exceptions import InputError
 
-#: Seed 001 Table 1, AHRS300CC: chamber temperatures and Y-axis noise coefficients.
+#: El-Diasty et al. (2007) Table 1, AHRS300CC: chamber temperatures and Y-axis noise coefficients.
 CC300_TEMPS_C = (-30.0, 0.0, 30.0, 60.0)
 CC300_GYRO_ARW = (3.0994, 2.6285, 2.8262, 3.0243)  # deg/sqrt(h)
 CC300_ACCEL_VRW = (0.3397, 0.2696, 0.2283, 0.2811)  # m/s/sqrt(h)
 
-#: Seed 004 Table 5.1 (15-18 April): per-gyro ARW deg/sqrt(s) and RRW deg/sqrt(s^3).
+#: Koldbæk and Totu (2011) Table 5.1 (15-18 April): per-gyro ARW deg/sqrt(s) and RRW deg/sqrt(s^3).
 ARRAY_ARW = (0.07118, 0.06882, 0.06434, 0.07874, 0.06654, 0.08422, 0.06221, 0.06654)
 ARRAY_RRW = (0.00032, 0.00018, 0.00027, 0.00039, 0.00028, 0.00015, 0.00033, 0.00029)
-#: Seed 004 eq. 5.4: typical ARW and RRW.
+#: Koldbæk and Totu (2011) eq. 5.4: typical ARW and RRW.
 ARRAY_TYPICAL = (0.068, 0.00029)
 
-#: Rate-table sequence of seed 000 section 4.3 (33 levels, deg/s).
+#: Rate-table sequence of Park (2004) section 4.3 (33 levels, deg/s).
 RATE_TABLE_LEVELS = tuple(range(0, 81, 10)) + tuple(range(70, -81, -10)) + tuple(range(-70, 1, 10))
 
 LOOP_RATE, LOOP_DURATION = 100.0, 300.0
@@ -294,7 +294,7 @@ def _temperature_biases(truth: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
             for s in truth["sources"] if s["kind"] == "temperature_bias"}
 
 
-# --- paper-like records (seed 002) --------------------------------------------------------
+# --- paper-like records (Tamazin et al. 2013) -------------------------------------------
 
 
 @_register(
@@ -307,7 +307,8 @@ def _paper_accel_y(gm_order=2):
     sources = [
         ConstantBias(mg_to_mps2(2.4233), name="bias"),
         WhiteNoise(vrw_to_density(sum(CC300_ACCEL_VRW) / 4), name="white"),
-        # Design choice: ~5 mg correlated component with 1 s stages (seed 002 Fig. 2 shape).
+        # Design choice: ~5 mg correlated component with 1 s stages
+        # (Tamazin et al. 2013, Fig. 2 shape).
         GaussMarkov(0.05, 1.0, order=gm_order, name="gm"),
         # Design choice: 0.5 mg bias instability, flicker band 0.1 s to 1000 s.
         BiasInstability(mg_to_mps2(0.5), 0.1, 1000.0, name="bias_instability"),
@@ -329,22 +330,24 @@ def _paper_gyro_y(units="deg/s", gm_order=2):
     sources = [
         ConstantBias(0.2813 * k, name="bias"),
         WhiteNoise(arw_to_density(sum(CC300_GYRO_ARW) / 4, units), name="white"),
-        # Design choice: 0.5 deg/s correlated component, 0.5 s stages (seed 002 Fig. 2 shape).
+        # Design choice: 0.5 deg/s correlated component, 0.5 s stages
+        # (Tamazin et al. 2013, Fig. 2 shape).
         GaussMarkov(0.5 * k, 0.5, order=gm_order, name="gm"),
-        # Design choice: 0.01 deg/s bias instability (seed 004's better gyro: 0.006 deg/s).
+        # Design choice: 0.01 deg/s bias instability (the better gyro of Koldbæk and Totu
+        # 2011: 0.006 deg/s).
         BiasInstability(0.01 * k, 0.1, 1000.0, name="bias_instability"),
     ]
     return dict(sources=sources, target="gyro_y", units=units, quantizer=Quantizer(0.025 * k))
 
 
-# --- gyro array (seed 004) ----------------------------------------------------------------
+# --- gyro array (Koldbæk and Totu 2011) ------------------------------------------------
 
 
 @_register(
     "gyro_array_8",
     3600.0,
     102.4,
-    "8 gyros (gyro_1..gyro_8) with seed 004 Table 5.1 "
+    "8 gyros (gyro_1..gyro_8) with Koldbæk and Totu (2011) Table 5.1 "
     "ARW/RRW; optional equicorrelation rho_arw / rho_rrw",
 )
 def _gyro_array_8(units="deg/s", rho_arw=0.0, rho_rrw=0.0, typical=False):
@@ -392,7 +395,7 @@ def _static_imu():
     return dict(sources=sources, target="gx_dps", units="deg/s", column_units=units)
 
 
-# --- temperature chamber (seed 001) and rate table (seed 000) ------------------------------
+# --- temperature chamber (El-Diasty et al. 2007) and rate table (Park 2004) ------------
 
 
 def _chamber(target, units, bias_coefs, densities):
@@ -416,7 +419,7 @@ def _chamber(target, units, bias_coefs, densities):
 )
 def _temp_chamber_gyro(units="deg/s"):
     k = rate_factor(units)
-    # Bias 0.2813 deg/s at 25 C (seed 000); 0.006 deg/s/C and 1e-4 deg/s/C^2 are choices.
+    # Bias 0.2813 deg/s at 25 C (Park 2004); 0.006 deg/s/C and 1e-4 deg/s/C^2 are choices.
     return _chamber(
         "gyro_y",
         units,
@@ -433,7 +436,7 @@ def _temp_chamber_gyro(units="deg/s"):
     "-30..+60 C steps: temp_c column, quadratic temperature bias, temperature-dependent VRW",
 )
 def _temp_chamber_accel():
-    # Bias 2.4233 mg at 25 C (seed 000); 0.05 mg/C and 0.002 mg/C^2 are choices.
+    # Bias 2.4233 mg at 25 C (Park 2004); 0.05 mg/C and 0.002 mg/C^2 are choices.
     return _chamber(
         "accel_y",
         ACCEL_UNIT,
@@ -447,7 +450,7 @@ def _temp_chamber_accel():
     660.0,
     100.0,
     "Yaw gyro on a rate table, 0->80->-80->0 deg/s in "
-    "10 deg/s steps (seed 000): rate_ref column, scale-factor error -0.3984 %, bias, ARW",
+    "10 deg/s steps (Park 2004): rate_ref column, scale-factor error -0.3984 %, bias, ARW",
 )
 def _rate_table_gyro():
     sources = [

@@ -216,7 +216,7 @@ class GaussMarkov(Source):
     autocorrelation ``sigma^2 exp(-|t|/tau_s)``.  Order ``m`` cascades ``m``
     identical first-order stages: an AR(m) process with the repeated pole
     ``phi`` (coefficients of ``(1 - phi z^-1)^m``), whose autocorrelation is
-    flat at the origin like the higher-order GM of seed 002 Figure 2.
+    flat at the origin like the higher-order GM of Tamazin et al. (2013) Figure 2.
 
     Parameters
     ----------
@@ -433,7 +433,7 @@ class NonlinearAR(Source):
 
 @dataclass(frozen=True)
 class TemperatureWhiteNoise(Source):
-    """White noise whose density depends on temperature (seed 001 Table 1).
+    """White noise whose density depends on temperature (El-Diasty et al. 2007, Table 1).
 
     The density is interpolated linearly in the ``input`` temperature column
     between the points ``(temps_c, densities)`` (held constant outside them).

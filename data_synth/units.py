@@ -13,7 +13,7 @@ The conversions are exact:
 * ``sqrt(h) = 60 sqrt(s)``, so an ARW of ``N`` deg/sqrt(h) is ``N/60``
   (deg/s)/sqrt(Hz), or ``N/60*3600 = 60 N`` (deg/h)/sqrt(Hz);
 * a white density ``d`` sampled at ``rate`` Hz has the per-sample standard
-  deviation ``d*sqrt(rate)`` (seed 004 eq. 4.10: ``sigma = N/sqrt(Ts)``);
+  deviation ``d*sqrt(rate)`` (Koldbæk and Totu 2011, eq. 4.10: ``sigma = N/sqrt(Ts)``);
 * a random walk of density ``K`` has per-sample increments of standard
   deviation ``K/sqrt(rate)``.
 
@@ -60,7 +60,7 @@ def arw_to_density(arw: float, units: str = "deg/s", *, per: str = "sqrt(h)") ->
     ----------
     arw : float
         Angle random walk in deg/sqrt(h) (``per="sqrt(h)"``, datasheets, seed
-        001 Table 1) or deg/sqrt(s) (``per="sqrt(s)"``, seed 004 Table 5.1).
+        001 Table 1) or deg/sqrt(s) (``per="sqrt(s)"``, Koldbæk and Totu 2011, Table 5.1).
     units : {"deg/s", "deg/h"}
         Unit of the gyro channel.
     per : {"sqrt(h)", "sqrt(s)"}
@@ -100,7 +100,7 @@ def rrw_to_density(rrw: float, units: str = "deg/s", *, per: str = "sqrt(s^3)") 
     Parameters
     ----------
     rrw : float
-        Rate random walk in deg/sqrt(s^3) (``per="sqrt(s^3)"``, seed 004) or in
+        Rate random walk in deg/sqrt(s^3) (``per="sqrt(s^3)"``, Koldbæk and Totu (2011)) or in
         deg/h/sqrt(h) (``per="h/sqrt(h)"``).
     units : {"deg/s", "deg/h"}
         Unit of the gyro channel.

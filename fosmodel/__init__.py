@@ -21,7 +21,6 @@ if TYPE_CHECKING:
     from .filter.joint_noise import joint_noise
     from .filter.statespace import to_state_space
     from .io.loader import load_record
-    from .io.model_file import read_model
     from .loop.closeloop import LoopConfig, close_loop
     from .models.baselines import ARModel, GaussMarkovModel
     from .models.model import FOSModel
@@ -42,7 +41,6 @@ else:
         "core.fos": ("FOSResult", "StopRule", "fos"),
         "filter.statespace": ("to_state_space",),
         "io.loader": ("load_record",),
-        "io.model_file": ("read_model",),
         "loop.closeloop": ("LoopConfig", "close_loop"),
         "models.baselines": ("ARModel", "GaussMarkovModel"),
         "models.model": ("FOSModel",),
@@ -63,6 +61,6 @@ __all__ = [
     "FOSResult", "GaussMarkovModel", "ImuConfig", "InputError", "LoopConfig", "NARXFeatures",
     "NoiseFit", "NotFittedError", "StopRule", "StudyConfig", "Term", "UnstableModelWarning",
     "__version__", "allan_deviation", "close_loop", "count_candidates", "fit_noise", "fos",
-    "generate_terms", "imu_noise", "joint_noise", "lagged_rows", "load_record", "read_model",
-    "run_fleet", "run_imu", "run_study", "to_state_space",
+    "generate_terms", "imu_noise", "joint_noise", "lagged_rows", "load_record", "run_fleet",
+    "run_imu", "run_study", "to_state_space",
 ]

@@ -1,6 +1,6 @@
 """``fosmodel demo``: the main job, on embedded data, with no network and no arguments.
 
-1. The FOS paper's model-order study on two seeded, paper-like one-hour 200 Hz
+1. Tamazin et al.'s (2013) model-order study on two seeded, paper-like one-hour 200 Hz
    records (accelerometer-Y in m/s^2, gyro-Y in deg/h, from :mod:`data_synth`):
    orders 1-10, FOS at CP 1 and 2, Yule-Walker, covariance, Burg and
    Gauss-Markov, under the paper protocol (baselines on wavelet-denoised data)

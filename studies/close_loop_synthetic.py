@@ -57,7 +57,7 @@ from fosmodel.loop import (
     Session,
     close_loop,
     close_sessions,
-    make,
+    make_effect,
     score_family,
     score_sessions,
     write_loop_report,
@@ -119,7 +119,7 @@ def loop_truth(truth: dict) -> list[tuple[Effect, bool]]:
         channel = getattr(effect, "channel", None)
         if effect.kind == "driver" and channel in bias:
             p = bias[channel]
-            effect = make("driver", channel=channel, part="slow",
+            effect = make_effect("driver", channel=channel, part="slow",
                           forms=[[power_name(channel, k, p["t_ref_c"]), c]
                                  for k, c in enumerate(p["coefs"]) if k and c])
         out.append((effect, slow))
@@ -140,7 +140,7 @@ def truth_metrics(rec, y, channels, config, res) -> dict:
     family = CandidateFamily(config.max_lag)
     for effect, _ in loop_truth(rec.truth):
         if effect.kind == "level":
-            effect = make("level", taus=res.level_taus)
+            effect = make_effect("level", taus=res.level_taus)
         family = family.add(effect, record)
     return score_family(y, channels, config, family)
 
@@ -228,13 +228,13 @@ def sweep_seed(label: str, scenario: str, column: str, day: int | None,
     if len(sessions) > 1:
         res: Any = close_sessions(_sessions(sessions, column), config)
         level = score_sessions(_sessions(sessions, column), config,
-                               [make("level", taus=res.level_taus)])
+                               [make_effect("level", taus=res.level_taus)])
         write = write_sessions_report
     else:
         rec = sessions[0]
         y, channels = _split(rec, column)
         res = close_loop(y, channels, config)
-        family = CandidateFamily(config.max_lag).add(make("level", taus=res.level_taus),
+        family = CandidateFamily(config.max_lag).add(make_effect("level", taus=res.level_taus),
                                                      LoopRecord.single(y, channels, rec.rate))
         level = score_family(y, channels, config, family)
         write = write_loop_report

@@ -1,11 +1,12 @@
-"""Arrays of gyros measuring one rate (seed 004 chapters 6-10).
+"""Arrays of gyros measuring one rate (Koldbæk and Totu 2011, chapters 6-10).
 
-1. Seed 004's closed-form averaging drift (Tables 10.1-10.2, eqs. 7.13-7.16).
+1. Koldbæk and Totu's (2011) closed-form averaging drift (Tables 10.1-10.2, eqs. 7.13-7.16).
 2. The steady-state Kalman gain of the virtual-gyro filter: the three-gyro example of eq. 8.8
    against the thesis's converged gain (eq. 8.9) and our own recursive run.
 3. Table 10.3 (unequal correlations Q_3, Q_5): averaging in closed form and the Kalman
    filter's exact angle-error standard deviation, where the thesis has only simulations.
-4. Monte Carlo on data_synth arrays (seed 004 Table 5.1 gyros, 102.4 Hz, one hour, 100 runs):
+4. Monte Carlo on data_synth arrays (Koldbæk and Totu 2011, Table 5.1 gyros, 102.4 Hz, one
+   hour, 100 runs):
    gyro 1 alone, the average and the constant-gain Kalman filter, against the closed forms.
 5. FOS of gyro 1's error with the other seven gyros as inputs, against AR of its own past.
 
@@ -47,7 +48,7 @@ from fosmodel.typeset import markdown_table
 OUT = Path(__file__).resolve().parent / "results" / "gyro_array"
 NAMES = tuple(f"gyro_{i}" for i in range(1, 9))
 RATE, HOUR, RUNS, CHUNK = 102.4, 3600.0, 100, 5
-#: Seed 004 eq. 8.9 (the thesis's converged recursive gain, three-gyro example).
+#: Koldbæk and Totu (2011) eq. 8.9 (the thesis's converged recursive gain, three-gyro example).
 GAIN_EQ_8_9 = np.array([
     [0.332815351545374, 0.332820262807916, 0.332827785499759],
     [3.31879037392269e-05, -7.49804087920127e-06, -2.56898612103661e-05],
@@ -64,7 +65,7 @@ def closed_form_table() -> pd.DataFrame:
     return pd.DataFrame([{
         "gyros": name, "hours": h, "angle drift (deg), eq. 7.15/7.16":
             averaging_angle_std(HOUR * h, 100.0, n_gyros=n, rho_w=rho),
-        "seed 004 (Table 10.2 / text)": thesis,
+        "Koldbæk and Totu (2011) (Table 10.2 / text)": thesis,
         "rate noise after 1 h (deg/s), eq. 7.13": averaging_rate_std(HOUR, 100.0, n_gyros=n,
                                                                      rho_w=rho),
     } for name, n, rho, h, thesis in rows])
@@ -77,7 +78,7 @@ def gain_tables() -> tuple[pd.DataFrame, pd.DataFrame]:
     gains = pd.concat([pd.DataFrame(k, columns=["z_1", "z_2", "z_3"]).assign(state=rows, gain=g)
                        for g, k in (("steady state (DARE)", steady),
                                     ("recursive, 400000 steps", recursive),
-                                    ("seed 004 eq. 8.9", GAIN_EQ_8_9))])
+                                    ("Koldbæk and Totu (2011) eq. 8.9", GAIN_EQ_8_9))])
     scale = np.abs(GAIN_EQ_8_9[1:]).max()
     diff = pd.DataFrame([{"pair": p, "max |difference|, rate row": np.abs(a[0] - b[0]).max(),
                           "max |difference| / max |bias gain|, bias rows":
@@ -165,7 +166,8 @@ def drift_study() -> tuple[pd.DataFrame, Figure]:
         ax.grid(alpha=0.3)
     fig.axes[0].set_ylabel("angle error standard deviation (deg)")
     fig.axes[0].legend(fontsize="small")
-    fig.suptitle("Still arrays of 8 gyros (data_synth, seed 004 Table 5.1 ARW/RRW, 102.4 Hz)")
+    fig.suptitle("Still arrays of 8 gyros (data_synth, Koldbæk and Totu 2011, Table 5.1 ARW/RRW, "
+                 "102.4 Hz)")
     return pd.DataFrame(rows), fig
 
 

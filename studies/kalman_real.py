@@ -18,7 +18,7 @@ Records (each axis split in halves: fitted on the first, filtered on the second)
   15-min records with a wandering level (``slow_random_walk``, and
   ``slow_random_walk_temperature`` with its switching temperature).
 
-Accelerometers (m/s^2) drive the 1-D position/velocity error filter (seed 000 eq. 5.7);
+Accelerometers (m/s^2) drive the 1-D position/velocity error filter (Park 2004, eq. 5.7);
 gyros (rad/s) drive their tilt analogue, built here by :func:`tilt_system`: the angle error
 integrates the gyro error and tilts gravity into the velocity error (``dv += dt g dtheta``),
 so a gyro's error reaches position as ``g * angle``.  The true position error is the double

@@ -1,14 +1,15 @@
-"""Seed 000's static Kalman filter test (section 5.1, Tables 5.1-5.3) on a data_synth record.
+"""Park's (2004) static Kalman filter test (section 5.1, Tables 5.1-5.3) on a data_synth record.
 
 A static accelerometer error record (scenario ``paper_accel_y`` at 20 Hz, four hours, seed
 0) is split in halves.  On the first half Gauss-Markov, AR(4) (Burg) and FOS models are
 fitted; FOS's maximum lag L is chosen among 4..10 by the one-step MSE on the last quarter of
 the training half (fitted on the rest), then refitted on the whole half.  On the second half
 the same filter runs with each model: states position error, velocity error and the error
-model's states (:func:`fosmodel.filter.statespace.position_velocity_error_model`, seed 000 eq. 5.7),
+model's states (:func:`fosmodel.filter.statespace.position_velocity_error_model`;
+Park 2004, eq. 5.7),
 with simulated position updates of standard deviation 0.01, 0.1 and 1 m, at every sample
 (20 Hz) or in update/prediction cycles of 10/10, 30/30, 60/60 and 120/120 s.  The
-accelerometer is compensated by the training mean (the calibrated bias, as seed 000 removed
+accelerometer is compensated by the training mean (the calibrated bias, as Park (2004) removed
 its Table 4.1 bias before filtering); the true position error is the double integral of the
 compensated error, discretised like the filter.  Every model sees the same measurement noise.
 
@@ -136,7 +137,7 @@ def filter_position_error(error: StateSpace, p0_error: np.ndarray, accel: np.nda
 
 
 def statistics(err: np.ndarray, variance: np.ndarray) -> dict[str, float]:
-    """Seed 000's mean, std and RMS of the error, and the RMS the filter claims."""
+    """Park's (2004) mean, std and RMS of the error, and the RMS the filter claims."""
     mean, std = float(np.mean(err)), float(np.std(err))
     return {"Mean [m]": mean, "St.D [m]": std, "RMS [m]": float(np.hypot(mean, std)),
             "Filter sigma [m]": float(np.sqrt(np.mean(variance)))}
@@ -190,7 +191,7 @@ def figure(traces: dict[str, np.ndarray]) -> Figure:
 
 
 def seed_tables(frame: pd.DataFrame) -> dict[str, pd.DataFrame]:
-    """The three tables of seed 000 (5.1: 20 Hz; 5.2: 30/30 s; 5.3: cycles at 0.1 m)."""
+    """The three tables of Park (2004) (5.1: 20 Hz; 5.2: 30/30 s; 5.3: cycles at 0.1 m)."""
     cols = ["sigma_R [m]", "Model", "Mean [m]", "St.D [m]", "RMS [m]", "% Improv.",
             "Filter sigma [m]"]
     return {

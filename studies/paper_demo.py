@@ -1,4 +1,4 @@
-"""The demo study from scratch: FOS paper Tables 1-2 and Figures 6-7 on paper-like records.
+"""The demo study from scratch: Tables 1-2 and Figures 6-7 of Tamazin et al. (2013), paper-like.
 
 Runs ``fosmodel demo`` into ``studies/results/paper_demo/`` and rewrites the
 section ``paper-demo`` of docs/pages/studies.md, with the two comparison tables, one figure and

@@ -48,7 +48,7 @@ from fosmodel.loop import (
     close_loop,
     evaluation_text,
     least_squares_spectrum,
-    make,
+    make_effect,
     score_family,
     slow_driver,
     write_loop_report,
@@ -371,8 +371,9 @@ def _temperature(axis: str, y: np.ndarray, temp: np.ndarray, rate: float, sensor
     finding = slow_driver(y, "temp_c", DriverForms(record, fit, config.slow_s), config.alpha)
     base = score_family(y, channels, config, CandidateFamily(config.max_lag))
     forms = finding.evidence["forms"]
+    slow = make_effect("driver", channel="temp_c", part="slow", forms=forms)
     warm = score_family(y, channels, config, CandidateFamily(config.max_lag).add(
-        make("driver", channel="temp_c", part="slow", forms=forms), record)) if forms else base
+        slow, record)) if forms else base
     means = y[:m].reshape(-1, n10).mean(axis=1), temp[:m].reshape(-1, n10).mean(axis=1)
     return {"Axis": axis, "corr(10 s means, temp_c)": np.corrcoef(*means)[0, 1],
             "slow-driver test p": finding.p_value,

@@ -1,8 +1,9 @@
-"""Temperature-dependent error models of the chamber records (seed 001).
+"""Temperature-dependent error models of the chamber records (El-Diasty et al. 2007).
 
 For ``temp_chamber_gyro`` (seed 0) and ``temp_chamber_accel`` (seed 1): the plateaus of the
 temperature column, the error model per plateau (bias, Allan white-noise coefficient, AR(1)
-weight, each with its standard error, as seed 001 Tables 1-2), one FOS model with temperature
+weight, each with its standard error, as El-Diasty et al. (2007) Tables 1-2), one FOS model with
+temperature
 fitted across all plateaus, and the leave-one-plateau-out comparison of the per-plateau table
 (as a calibration polynomial), the FOS model with temperature and the FOS model without it.
 Writes tables (Markdown, CSV, LaTeX) and the figure ``coefficients.png`` to
@@ -37,7 +38,8 @@ from fosmodel.study import (
 from fosmodel.typeset import markdown_table
 
 OUT = Path(__file__).resolve().parent / "results" / "temperature_chamber"
-#: sensor: scenario, units, seed 001 Table 1 noise, seed.  The two scenarios draw their white
+#: sensor: scenario, units, Table 1 noise of El-Diasty et al. (2007), seed.  The two scenarios
+#: draw their white
 #: noise from the same stream name, so one seed would give both the same normalised noise.
 RECORDS = {"gyro": ("temp_chamber_gyro", "deg/s", CC300_GYRO_ARW, 0),
            "accel": ("temp_chamber_accel", "m/s^2", CC300_ACCEL_VRW, 1)}
@@ -107,11 +109,11 @@ def figure(tables: dict[str, pd.DataFrame]) -> Figure:
         row[0].set_ylabel(f"{sensor} bias ({RECORDS[sensor][1]})")
         row[1].errorbar(t, table["noise"], 2 * table["noise_se"], fmt="o", capsize=3)
         row[1].plot(CC300_TEMPS_C, RECORDS[sensor][2], "ks", mfc="none",
-                    label="seed 001 Table 1 (the truth)")
+                    label="El-Diasty et al. (2007) Table 1 (the truth)")
         row[1].set_ylabel(f"white noise ({table['noise_units'].iloc[0]})")
         row[2].errorbar(t, table["coef y[n-1]"], 2 * table["se y[n-1]"], fmt="o", capsize=3)
         row[2].axhline(0.0, color="k", lw=0.8)
-        row[2].set_ylabel("AR(1) weight (seed 001 Table 2's C_AR)")
+        row[2].set_ylabel("AR(1) weight (El-Diasty et al. 2007, Table 2's C_AR)")
         for ax in row:
             ax.set_xlabel("plateau temperature (C)")
             ax.grid(alpha=0.3)

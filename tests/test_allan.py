@@ -67,7 +67,7 @@ def _inside(fit, term, truth):
 
 
 def test_adev_matches_the_overlapping_definition():
-    """Seed 001 eq. (1): sigma^2 = mean of (ybar[n+m] - ybar[n])^2 / 2 over all n."""
+    """El-Diasty et al. (2007) eq. (1): sigma^2 = mean of (ybar[n+m] - ybar[n])^2 / 2 over all n."""
     y = np.random.default_rng(4).normal(size=3000) + np.linspace(0, 1, 3000)
     rate = 50.0
     result = allan_deviation(y, rate, taus=[1 / rate, 7 / rate, 50 / rate, 333 / rate])
@@ -136,7 +136,7 @@ def test_ci_covers_the_true_adev_of_white_noise_about_68_percent():
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_white_noise_arw_recovered(seed):
-    """Seed 001 Table 1 gyro ARW 2.8946 deg/sqrt(h) at 100 Hz for 200 s (20000 samples)."""
+    """El-Diasty et al. (2007) Table 1 gyro ARW 2.8946 deg/sqrt(h), 100 Hz, 200 s."""
     density = arw_to_density(2.8946)
     result = allan_deviation(_record([WhiteNoise(density)], 200, 100.0, seed), 100.0,
                              units="deg/s", sensor="gyro")
@@ -212,8 +212,8 @@ def test_rate_random_walk_recovered(seed):
 
 
 @pytest.mark.slow
-def test_seed_004_gyro_arw_and_rrw_recovered():
-    """Seed 004 eq. 5.4: ARW 0.068 deg/sqrt(s), RRW 0.00029 deg/sqrt(s^3) at 102.4 Hz.
+def test_koldbaek_totu_2011_gyro_arw_and_rrw_recovered():
+    """Koldbæk and Totu (2011) eq. 5.4: ARW 0.068 deg/sqrt(s), RRW 0.00029 deg/sqrt(s^3), 102.4 Hz.
 
     RRW overtakes ARW at tau = sqrt(3) N/K = 406 s, so the record must be long
     against that: 12 h leaves 106 clusters at the crossover and RRW dominates
@@ -282,7 +282,7 @@ def test_bias_instability_recovered_on_its_floor():
 
 
 def test_accelerometer_vrw_in_navigation_units_independent_of_record_units():
-    """Seed 001 Table 1 accelerometer VRW 0.2797 m/s/sqrt(h); the same record in mg."""
+    """El-Diasty et al. (2007) Table 1 accelerometer VRW 0.2797 m/s/sqrt(h); the record in mg."""
     density = vrw_to_density(0.2797)
     y = _record([WhiteNoise(density)], 300, 100.0, 5, units="m/s^2")
     fit = fit_noise(allan_deviation(y, 100.0, units="m/s^2", sensor="accel"))

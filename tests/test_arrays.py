@@ -1,4 +1,4 @@
-"""Gyro arrays (fosmodel.filter.arrays): seed 004's closed forms, the Kalman gain, drift, FOS."""
+"""Gyro arrays (fosmodel.filter.arrays): closed forms of Koldbæk and Totu 2011, gain, drift, FOS."""
 
 import math
 
@@ -28,7 +28,8 @@ from fosmodel.filter.arrays import (
 )
 
 NAMES = tuple(f"gyro_{i}" for i in range(1, 9))
-#: Seed 004 eq. 8.9: the converged recursive gain of the three-gyro example (rows omega, b_1..3).
+#: Koldbæk and Totu (2011) eq. 8.9: the converged recursive gain of the three-gyro example
+#: (rows omega, b_1..3).
 GAIN_EQ_8_9 = np.array([
     [0.332815351545374, 0.332820262807916, 0.332827785499759],
     [3.31879037392269e-05, -7.49804087920127e-06, -2.56898612103661e-05],
@@ -39,13 +40,13 @@ GAIN_EQ_8_9 = np.array([
 @pytest.mark.parametrize(("n_gyros", "rho", "hours", "thesis"), [
     (1, 0.0, 1, 36.4), (8, 0.0, 1, 12.87), (8, -0.1, 1, 7.15), (8, -0.1428571, 1, 1.44),
     (8, -1 / 7, 1, 1.44), (8, 0.3, 1, 22.56), (8, -0.1428571, 10, 4.57)])
-def test_averaging_drift_reproduces_seed_004_table_10_2(n_gyros, rho, hours, thesis):
+def test_averaging_drift_reproduces_koldbaek_totu_2011_table_10_2(n_gyros, rho, hours, thesis):
     drift = averaging_angle_std(3600.0 * hours, 100.0, 0.0029, 0.68, n_gyros, rho_w=rho)
     digits = len(str(thesis).split(".")[1])
     assert round(drift, digits) == thesis
 
 
-def test_averaging_rate_noise_reproduces_seed_004_table_10_1():
+def test_averaging_rate_noise_reproduces_koldbaek_totu_2011_table_10_1():
     assert round(averaging_rate_std(3600.0, 100.0, n_gyros=8), 4) == 0.2405
     assert round(averaging_rate_std(3600.0, 100.0, n_gyros=8, rho_w=-0.1428571), 4) == 0.2404
     assert round(averaging_rate_std(3600.0, 100.0, n_gyros=8, rho_w=0.3), 4) == 0.2407
@@ -53,7 +54,7 @@ def test_averaging_rate_noise_reproduces_seed_004_table_10_1():
     assert round(averaging_rate_std(3600.0, 100.0) ** 2, 4) == 0.4627
 
 
-def test_averaging_drift_reproduces_the_averaging_column_of_seed_004_table_10_3():
+def test_averaging_drift_reproduces_the_averaging_column_of_koldbaek_totu_2011_table_10_3():
     model = {"Q3": ArrayModel.from_noise(8, 100.0, corr_w=CORR_Q3),
              "Q5": ArrayModel.from_noise(8, 100.0, corr_w=CORR_Q5)}
     got = {(k, h): round(float(angle_error_std(360_000 * h, 0.01, m.cov_w, m.cov_v)), 2)
@@ -82,7 +83,7 @@ def test_general_angle_error_matches_the_covariance_of_the_summed_readings():
     assert got == pytest.approx(math.sqrt(var), rel=1e-12)
 
 
-def test_steady_state_gain_reproduces_seed_004_eq_8_9():
+def test_steady_state_gain_reproduces_koldbaek_totu_2011_eq_8_9():
     gain = steady_state_gain(ArrayModel.from_noise(3, 100.0, corr_w=CORR_EQ_8_8))
     # float64 limit: sigma_omega = 1e3 against sigma_w = 0.0029 and bias modes of ~3e4 samples
     np.testing.assert_allclose(gain, GAIN_EQ_8_9, rtol=0, atol=1e-4 * 3.5e-5)
@@ -121,7 +122,7 @@ def _still_array(seed, corr_w, rrw, duration=60.0, rate=102.4):
 @pytest.mark.slow
 def test_monte_carlo_drift_agrees_with_the_closed_forms():
     rate, runs = 102.4, 400
-    rrw = 30 * np.array(ARRAY_RRW)  # 30x seed 004's RRW: the bias walks matter within 60 s
+    rrw = 30 * np.array(ARRAY_RRW)  # 30x the thesis's RRW: bias walks matter in 60 s
     model = ArrayModel(covariance(rrw * math.sqrt(rate), CORR_Q5, 8),
                        covariance(np.array(ARRAY_ARW) * math.sqrt(rate), 0.0, 8), rate)
     gain = steady_state_gain(model)

@@ -20,7 +20,7 @@ NAMES = tuple(f"gyro_{i}" for i in range(1, 9))
 
 def test_array_sources_refuse_an_impossible_correlation():
     # the check is fosmodel.filter.arrays.correlation's (tested there); the sources apply it
-    CorrelatedWhiteNoise(NAMES, (0.1,), corr=-1 / 7)  # the limit of seed 004 eq. 6.38
+    CorrelatedWhiteNoise(NAMES, (0.1,), corr=-1 / 7)  # Koldbæk and Totu 2011, eq. 6.38
     with pytest.raises(ValueError, match="rho >= -0.142857"):
         CorrelatedWhiteNoise(NAMES, (0.1,), corr=-0.2)
     with pytest.raises(ValueError, match="symmetric"):

@@ -11,7 +11,7 @@ from data_synth.record import source_rng
 RNG = source_rng(0, "profiles")
 
 
-def test_chamber_levels_are_seed_001_set_points():
+def test_chamber_levels_are_el_diasty_2007_set_points():
     assert CHAMBER_LEVELS_C == (-30.0, -20.0, -10.0, 0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0)
 
 

@@ -149,7 +149,7 @@ def test_temperature_chamber_steps_and_bias():
     for level in range(10):
         sl = slice((level + 1) * dwell - 6000, (level + 1) * dwell)  # the settled last minute
         expected = evaluate(bias["terms"], {"gyro_y": gyro[sl], "temp_c": temp[sl]}, "gyro_y")
-        noise = 3.1 / 60 * 10  # worst ARW of seed 001 Table 1, per sample at 100 Hz
+        noise = 3.1 / 60 * 10  # worst ARW of El-Diasty et al. (2007) Table 1, per sample at 100 Hz
         assert abs(np.mean(gyro[sl] - expected)) < Z * noise / math.sqrt(6000)
     accel = make_scenario("temp_chamber_accel", duration=100.0)
     assert accel.truth["units"] == "m/s^2" and accel.target == "accel_y"

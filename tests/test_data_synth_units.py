@@ -21,7 +21,7 @@ def test_arw_round_trip_and_per_sample_sigma():
     # ARW 2.89 deg/sqrt(h) at 200 Hz: 2.89 * 60 * sqrt(200) deg/h per sample
     d = units.arw_to_density(2.89, "deg/h")
     assert units.white_sigma(d, 200.0) == pytest.approx(2.89 * 60 * math.sqrt(200))
-    # seed 004 eq. 4.10: sigma = ARW_c / sqrt(Ts)
+    # Koldbæk and Totu (2011) eq. 4.10: sigma = ARW_c / sqrt(Ts)
     assert units.white_sigma(0.068, 102.4) == pytest.approx(0.068 / math.sqrt(1 / 102.4))
 
 

@@ -13,7 +13,7 @@ from threadpoolctl import threadpool_info
 from fosmodel import cli
 from fosmodel.core.exceptions import InputError
 from fosmodel.study import harness
-from fosmodel.study.distributed import WORKER_ENV, connect, local_client
+from fosmodel.study.distributed import WORKER_ENV, connect_scheduler, local_client
 from fosmodel.study.harness import StudyConfig, plan_study
 from fosmodel.study.runner import run_studies, run_study
 
@@ -133,9 +133,9 @@ def _closed_port():
 def test_unreachable_scheduler_is_an_input_error():
     address = f"tcp://127.0.0.1:{_closed_port()}"
     with pytest.raises(InputError, match=f"cannot connect to the Dask scheduler at {address}"):
-        connect(address, timeout=1.0)
+        connect_scheduler(address, timeout=1.0)
     with pytest.raises(InputError, match="cannot connect"):
-        connect("no-port-here", timeout=1.0)
+        connect_scheduler("no-port-here", timeout=1.0)
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ from fosmodel.loop.effects import (
     effect_from_dict,
     effects_from,
     kinds,
-    make,
+    make_effect,
     register,
     unregister,
 )
@@ -39,38 +39,38 @@ def test_every_kind_is_registered_in_rank_order():
     assert kinds() == ("level", "driver", "companion", "periodic", "nonlinear", "drift", "step")
     assert all(effect_class(k).kind == k for k in kinds())
     with pytest.raises(ValueError, match="unknown effect kind 'magic'; known: level, driver"):
-        make("magic")
+        make_effect("magic")
 
 
 def test_each_kind_adds_its_candidates():
     fam = CandidateFamily(5)
     lag = power_name("temp_c", 1, 25.0, tau_s=60)
-    slow = fam.add(make("driver", channel="temp_c", part="slow", forms=[[lag, 0.02]],
+    slow = fam.add(make_effect("driver", channel="temp_c", part="slow", forms=[[lag, 0.02]],
                         level_taus=[2.0, 8.0], block=10, level_blocks=6.0), RECORD)
     assert slow.compensation == {lag: 0.02} and slow.levels == (2.0, 8.0)
     assert slow.comp_fit == (10, 1 / 6.0) and not slow.exog_lags
     np.testing.assert_allclose(slow.compensation_series(),
                                0.02 * (RECORD.derive(lowpass_name("temp_c", 60)) - 25.0))
-    fast = fam.add(make("driver", channel="Accel X (g)", part="fast", max_lag=2, tau_s=20.0),
+    fast = fam.add(make_effect("driver", channel="Accel X (g)", part="fast", max_lag=2, tau_s=20.0),
                    RECORD)
     token = "u__Accel_20_X_20__28_g_29__fast20s"
     assert fast.exog_lags == {token: 2} and not fast.columns
     x = RECORD.channels["Accel X (g)"]
     start = x[:200].mean()  # the fast part's level starts at the mean of its first 20 s
     np.testing.assert_allclose(fast.inputs[token], x - level_series(np.r_[start, x], 20, RATE)[1:])
-    companion = fam.add(make("companion", channel="gz_dps", max_lag=3, tau_s=20.0), RECORD)
+    companion = fam.add(make_effect("companion", channel="gz_dps", max_lag=3, tau_s=20.0), RECORD)
     assert companion.exog_lags == {"gz_dps_fast20s": 3}
-    per = fam.add(make("periodic", freq_hz=1.25), RECORD)
+    per = fam.add(make_effect("periodic", freq_hz=1.25), RECORD)
     np.testing.assert_allclose(per.columns["cos@1.25Hz"], np.cos(2 * np.pi * 1.25 * TIME))
     np.testing.assert_allclose(per.columns["sin@1.25Hz"], np.sin(2 * np.pi * 1.25 * TIME))
-    nonlinear = fam.add(make("nonlinear", max_lag=4), RECORD)
+    nonlinear = fam.add(make_effect("nonlinear", max_lag=4), RECORD)
     assert nonlinear.degree == 2 and nonlinear.product_lags == 4
-    level = fam.add(make("level", taus=(2.0, 8.0)), RECORD)
+    level = fam.add(make_effect("level", taus=(2.0, 8.0)), RECORD)
     assert level.levels == (2.0, 8.0) and not level.columns
-    drift = fam.add(make("drift", form="linear", tau_s=4.0), RECORD)
+    drift = fam.add(make_effect("drift", form="linear", tau_s=4.0), RECORD)
     np.testing.assert_allclose(drift.columns["t@s"], TIME)
     np.testing.assert_allclose(drift.columns["exp(-t/4s)"], np.exp(-TIME / 4.0))
-    step = fam.add(make("step", time_s=7.5), RECORD)
+    step = fam.add(make_effect("step", time_s=7.5), RECORD)
     np.testing.assert_array_equal(step.columns["step@7.5s"], (TIME >= 7.5).astype(float))
     assert fam.columns == {} and fam.degree == 1  # the family itself is unchanged
     spec = CandidateSpec(2, 1, {**fast.exog_lags, **companion.exog_lags},
@@ -79,13 +79,13 @@ def test_each_kind_adds_its_candidates():
 
 
 @pytest.mark.parametrize("effect", [
-    make("level", taus=(1.5, 30.0)),
-    make("driver", channel="temp_c", part="slow", forms=[["pow(temp_c,2,25)", 0.001]],
+    make_effect("level", taus=(1.5, 30.0)),
+    make_effect("driver", channel="temp_c", part="slow", forms=[["pow(temp_c,2,25)", 0.001]],
          level_taus=[3.0], block=20, level_blocks=None),
-    make("driver", channel="ay", part="fast", max_lag=10, tau_s=20.0),
-    make("companion", channel="gz_dps", max_lag=10, tau_s=20.0),
-    make("periodic", freq_hz=7.31374), make("nonlinear", max_lag=4),
-    make("drift", form="exponential", tau_s=62.33), make("step", time_s=104.9)])
+    make_effect("driver", channel="ay", part="fast", max_lag=10, tau_s=20.0),
+    make_effect("companion", channel="gz_dps", max_lag=10, tau_s=20.0),
+    make_effect("periodic", freq_hz=7.31374), make_effect("nonlinear", max_lag=4),
+    make_effect("drift", form="exponential", tau_s=62.33), make_effect("step", time_s=104.9)])
 def test_each_kind_round_trips_through_its_json(effect):
     import json
 
@@ -95,22 +95,22 @@ def test_each_kind_round_trips_through_its_json(effect):
 
 
 def test_descriptions():
-    assert make("periodic", freq_hz=7.31374).describe() == "periodic 7.3137 Hz"
-    assert make("step", time_s=105.0).describe() == "step at 105 s"
-    assert make("level", taus=(1.5, 30.0)).describe() == "local level (tau 1.5-30 s)"
-    assert make("driver", channel="ay", part="fast", max_lag=10, tau_s=20.0).describe() == (
+    assert make_effect("periodic", freq_hz=7.31374).describe() == "periodic 7.3137 Hz"
+    assert make_effect("step", time_s=105.0).describe() == "step at 105 s"
+    assert make_effect("level", taus=(1.5, 30.0)).describe() == "local level (tau 1.5-30 s)"
+    assert make_effect("driver", channel="ay", part="fast", max_lag=10, tau_s=20.0).describe() == (
         "driver ay, fast part (lags 0-10)")
     forms = [[power_name("temp_c", 1, 25), 0.02], [power_name("temp_c", 2, 25), 0.001],
              [power_name("temp_c", 1, 25, tau_s=600), 0.01]]
-    assert make("driver", channel="temp_c", part="slow", forms=forms,
+    assert make_effect("driver", channel="temp_c", part="slow", forms=forms,
                 level_taus=[5.0]).describe() == (
         "driver temp_c, slow part (as read, powers 1, 2; lag 600 s, power 1) with the level")
-    assert make("companion", channel="gz_dps", max_lag=10).describe() == (
+    assert make_effect("companion", channel="gz_dps", max_lag=10).describe() == (
         "companion gz_dps as an input, as asked (fast part, lags 0-10)")
-    assert make("nonlinear", max_lag=4).describe() == (
+    assert make_effect("nonlinear", max_lag=4).describe() == (
         "nonlinear (cross-products of degree 2 of y[n-1]..y[n-4])")
     # the synthetic records' truth still spells a channel input "aux": a driver's fast part
-    assert Effect("aux", channel="accel_x", max_lag=5).describe() == (
+    assert make_effect("aux", channel="accel_x", max_lag=5).describe() == (
         "driver accel_x, fast part (lags 0-5)")
 
 
@@ -159,23 +159,24 @@ def test_findings_offer_effects_by_role():
 
 
 def test_slow_relations_and_sameness():
-    assert make("drift", tau_s=5.0).strict and make("step", time_s=1.0).strict
-    assert not make("level", taus=(1.0,)).strict
-    assert not make("driver", channel="t", part="slow").strict
-    assert make("driver", channel="t", part="fast", max_lag=1, tau_s=20.0).strict
-    assert not make("driver", channel="t", part="fast").same_as(make("driver", channel="t"))
-    assert make("level", taus=(1.0,)).same_as(make("level", taus=(2.0,)))
+    assert make_effect("drift", tau_s=5.0).strict and make_effect("step", time_s=1.0).strict
+    assert not make_effect("level", taus=(1.0,)).strict
+    assert not make_effect("driver", channel="t", part="slow").strict
+    assert make_effect("driver", channel="t", part="fast", max_lag=1, tau_s=20.0).strict
+    assert not make_effect("driver", channel="t", part="fast").same_as(
+        make_effect("driver", channel="t"))
+    assert make_effect("level", taus=(1.0,)).same_as(make_effect("level", taus=(2.0,)))
     # a slow part's forms with the level or without are one cause, added once; other forms
     # (a lag the residual still follows) are another
     lagged = [["pow(lowpass(t,600s),1,10)", 2.0]]
-    alone = make("driver", channel="t", forms=[["pow(t,1,10)", 1.0]])
-    assert make("driver", channel="t", forms=[["pow(t,1,10)", 0.5]],
+    alone = make_effect("driver", channel="t", forms=[["pow(t,1,10)", 1.0]])
+    assert make_effect("driver", channel="t", forms=[["pow(t,1,10)", 0.5]],
                 level_taus=[10.0]).same_as(alone)
-    assert not make("driver", channel="t", forms=lagged).same_as(alone)
-    assert make("periodic", freq_hz=7.30).same_as(make("periodic", freq_hz=7.33))
-    assert make("drift").waits_for == ("level", "driver") == make("step").waits_for
-    assert not make("periodic").pooled and not make("step").pooled
-    assert make("driver", channel="t").pooled and make("drift").pooled
+    assert not make_effect("driver", channel="t", forms=lagged).same_as(alone)
+    assert make_effect("periodic", freq_hz=7.30).same_as(make_effect("periodic", freq_hz=7.33))
+    assert make_effect("drift").waits_for == ("level", "driver") == make_effect("step").waits_for
+    assert not make_effect("periodic").pooled and not make_effect("step").pooled
+    assert make_effect("driver", channel="t").pooled and make_effect("drift").pooled
 
 
 @dataclass(frozen=True)

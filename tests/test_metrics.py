@@ -49,7 +49,7 @@ def test_unknown_sensor_names_the_valid_ones():
         to_si_scale("magnetometer", "T")
 
 
-# -- the FOS paper's equivalent position error (T = 3600 s) --------------------------------
+# -- Tamazin et al.'s (2013) equivalent position error (T = 3600 s) --------------------------------
 
 # Table 1 (accelerometer-Y, MSE in (m/s^2)^2) and Table 2 (gyro-Y, MSE in (deg/h)^2):
 # (MSE, position error in metres as printed).

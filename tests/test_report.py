@@ -75,19 +75,21 @@ def test_the_comparison_table_takes_the_lowest_and_the_highest_order(tmp_path):
     assert "Gauss-Markov" in set(table[table["Order L"] == 1]["Method"])
     assert list(paper_table(result, orders=(2, 3))["Order L"].unique()) == [2, 3]
     write_study(result, tmp_path, "orders 1-4")
-    assert "## Comparison at orders 1 and 4 (FOS paper" in (tmp_path / "report.md").read_text()
+    report = (tmp_path / "report.md").read_text()
+    assert "## Comparison at orders 1 and 4 (Tamazin et al. 2013" in report
     assert "at model orders 1 and 4" in (tmp_path / "comparison.tex").read_text()
 
 
 def test_every_metric_of_the_report_is_defined_where_it_appears(result, tmp_path):
-    """The comparison table's position error of 1e8 m says what it is: the FOS paper's
+    """The comparison table's position error of 1e8 m says what it is: Tamazin et al.'s (2013)
     equivalent position error over T = 3600 s; the outage error its horizon and segment."""
     write_study(result, tmp_path, "defined")
     page = (tmp_path / "report.md").read_text()
     table_end = page.index("What the columns are:")
     assert page.index("| Position error (m) |") < table_end
     notes = page[table_end:page.index("## Best configuration")]
-    assert ("- Position error (m): the FOS paper's equivalent position error, T = 3600 s: an "
+    assert ("- Position error (m): the equivalent position error of Tamazin et al. (2013), "
+            "T = 3600 s: an "
             "error of constant size sqrt(MSE) integrated freely for an hour, 0.5 sqrt(MSE) T^2 "
             "for an accelerometer and g sqrt(MSE) T^3 / 6 for a gyroscope") in notes
     assert "- MSE (deg/s)^2: the mean square of the one-step prediction error on the " \

@@ -213,7 +213,7 @@ def test_jacobian_of_a_power_uses_the_product_rule():
 # -- augmentation, serialisation, refusals -------------------------------------------------
 
 
-def test_position_velocity_augmentation_is_seed_000_eq_5_7():
+def test_position_velocity_augmentation_is_park_2004_eq_5_7():
     model = ARModel(4, "burg").fit(AR2)
     dt = 0.05
     system = position_velocity_error_model(to_state_space(model), dt)

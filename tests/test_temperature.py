@@ -82,7 +82,7 @@ def test_per_plateau_bias_matches_the_truth_polynomial_within_its_standard_error
     np.testing.assert_allclose(table["se y[n-1]"], 1 / np.sqrt(table["n"]), rtol=0.05)
 
 
-def test_per_plateau_noise_follows_seed_001_table_1(chamber):
+def test_per_plateau_noise_follows_el_diasty_2007_table_1(chamber):
     rec = chamber["temp_chamber_gyro"]
     y, temp = rec.columns[rec.target], rec.columns["temp_c"]
     segments = temperature_segments(temp, rec.rate)

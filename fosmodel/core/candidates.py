@@ -1,4 +1,4 @@
-"""Candidate functions of Fast Orthogonal Search (eq. 15 of the FOS paper).
+"""Candidate functions of Fast Orthogonal Search (eq. 15 of Tamazin et al. (2013)).
 
 A candidate is a product of *factors*.  A factor is a lagged channel value
 ``ch[n-k]`` (the modelled output is always the channel ``y``, lags 1..L; an
@@ -13,6 +13,15 @@ Names are readable and parse back to the same term::
 
 Factors are ordered canonically: ``y`` first, then the levels, other channels
 alphabetically, then by lag; a repeated factor is written as a power.
+
+References
+----------
+.. [1] M. J. Korenberg, "Identifying nonlinear difference equation and functional expansion
+   representations: the fast orthogonal algorithm", Annals of Biomedical Engineering 16,
+   123-142, 1988.
+.. [2] M. Tamazin, A. Noureldin and M. J. Korenberg, "Robust Modeling of Low-Cost MEMS Sensor
+   Errors in Mobile Devices Using Fast Orthogonal Search", Journal of Sensors (Hindawi),
+   2013, Article ID 101820.
 """
 
 from __future__ import annotations

@@ -30,6 +30,14 @@ candidate set for the batch every fit starts with.  This module does the sums.
 :class:`LagCorrelations` is the fast provider for :func:`fosmodel.core.fos.fos_search`;
 the point-by-point reference is :class:`fosmodel.core.fos.DataCorrelations` on the
 matrix from :func:`fosmodel.core.candidates.evaluate_terms`.
+
+References
+----------
+.. [1] M. J. Korenberg, "Identifying nonlinear difference equation and functional expansion
+   representations: the fast orthogonal algorithm", Annals of Biomedical Engineering 16,
+   123-142, 1988.
+.. [2] M. J. Korenberg, "A robust orthogonal algorithm for system identification and
+   time-series analysis", Biological Cybernetics 60(4), 267-276, 1989.
 """
 
 from __future__ import annotations

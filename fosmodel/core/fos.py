@@ -1,4 +1,4 @@
-"""Fast Orthogonal Search: Korenberg's implicit Gram-Schmidt (FOS paper, eqs. 17-28).
+"""Fast Orthogonal Search: Korenberg's implicit Gram-Schmidt (Tamazin et al. 2013, eqs. 17-28).
 
 The search needs only correlations: the mean of each candidate, its mean
 square, its correlation with the output and, for each *selected* term, its
@@ -16,6 +16,17 @@ is treated in closed form as the first orthogonal function (eqs. 17-18): after
 it, ``D(m, 1..)`` are covariances, which is also how the kernel keeps its
 precision on signals with a large offset.  The orthogonal functions ``w_m``
 are never built point by point.
+
+References
+----------
+.. [1] M. J. Korenberg, "Identifying nonlinear difference equation and functional expansion
+   representations: the fast orthogonal algorithm", Annals of Biomedical Engineering 16,
+   123-142, 1988.
+.. [2] M. J. Korenberg, "A robust orthogonal algorithm for system identification and
+   time-series analysis", Biological Cybernetics 60(4), 267-276, 1989.
+.. [3] M. Tamazin, A. Noureldin and M. J. Korenberg, "Robust Modeling of Low-Cost MEMS Sensor
+   Errors in Mobile Devices Using Fast Orthogonal Search", Journal of Sensors (Hindawi),
+   2013, Article ID 101820.
 """
 
 from __future__ import annotations
@@ -271,7 +282,7 @@ def fos_search(
     (:class:`fosmodel.core.correlations.LagCorrelations`, the fast path).  It checks
     nothing: its callers (:func:`fos`, :class:`fosmodel.models.model.FOSModel`) validate.
 
-    Notation of the FOS paper: ``D(c, r)`` (eq. 19) for candidate c against
+    Notation of Tamazin et al. (2013): ``D(c, r)`` (eq. 19) for candidate c against
     the r-th selected term, ``alpha_cr = D(c, r) / D(r, r)`` (eq. 20),
     ``C(c)`` (eq. 22), ``g = C / D(m, m)`` (eq. 23) and ``Q = g^2 D(m, m)``
     (eq. 27).  For every remaining candidate the kernel keeps ``D(c, c)`` and

@@ -1,7 +1,8 @@
 """Error models in a navigation filter: shaping filters, a Kalman filter, gyro arrays.
 
 Fitted models and Allan fits as state-space shaping filters, a small linear Kalman filter,
-and gyro arrays (averaging and the virtual gyro, with the correlation matrices of seed 004).
+and gyro arrays (averaging and the virtual gyro, with the correlation matrices of Koldbæk and
+Totu, 2011).
 
 Imports the layers below it (core, models, io, noise).  Its public names are imported on
 first use (:mod:`fosmodel._lazy`).

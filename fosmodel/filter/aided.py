@@ -1,6 +1,6 @@
 """An error model judged in an aided filter: position fixes in cycles, free prediction between.
 
-A static record's error drives a 1-D position/velocity error state (seed 000, eq. 5.7:
+A static record's error drives a 1-D position/velocity error state (Park 2004, eq. 5.7:
 :func:`~fosmodel.filter.statespace.position_velocity_error_model`); the filter gets position
 fixes of standard deviation ``sigma`` during the first half of every ``2 * cycle_s`` period
 and predicts freely in the second.  The true position error is the double integral of the
@@ -19,6 +19,9 @@ References
 ----------
 Y. Bar-Shalom, X. R. Li and T. Kirubarajan, *Estimation with Applications to Tracking and
 Navigation*, Wiley, 2001, sec. 5.4 (NEES).
+M. Park, "Error Analysis and Stochastic Modeling of MEMS based Inertial Sensors for Land
+Vehicle Navigation Applications", M.Sc. thesis, UCGE Report 20194, University of Calgary,
+2004.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-"""Arrays of gyros measuring one rate: averaging, the virtual-gyro Kalman filter, FOS (seed 004).
+"""Arrays of gyros measuring one rate: averaging, the virtual-gyro Kalman filter, FOS.
 
-Seed 004 (chapters 6-10) models ``N`` gyros on one board (eqs. 6.1-6.9)::
+Koldbæk and Totu (2011) (chapters 6-10) models ``N`` gyros on one board (eqs. 6.1-6.9)::
 
     z_i[k] = omega[k] + b_i[k] + v_i[k],   b_i[k+1] = b_i[k] + Ts w_i[k],   omega[k+1] = Ts w_o[k]
 
@@ -21,6 +21,12 @@ ADIS16265 values at 100 Hz, ARW 0.068 deg/sqrt(s) and RRW 0.00029 deg/sqrt(s^3) 
   angle-error standard deviation of that filter (the thesis has no formula for it, Table 10.3).
 * :func:`cross_gyro_comparison`: a FOS model of one gyro's error with the others as exogenous
   inputs against an AR model of its own past.
+
+References
+----------
+.. [1] S. K. Koldbæk and L.-C. Totu, "Improving MEMS Gyroscope Performance using Homogeneous
+   Sensor Fusion", Master's thesis, Department of Electronic Systems, Aalborg University,
+   2011.
 """
 
 from __future__ import annotations
@@ -37,7 +43,8 @@ from ..models.model import FOSModel
 from ..noise.metrics import one_step_mse
 from .kalman import KalmanFilter
 
-#: Seed 004 eq. 5.4 at 100 Hz: sigma_v = 0.068 sqrt(100) deg/s, sigma_w = 0.00029 sqrt(100) deg/s^2.
+#: Koldbæk and Totu (2011) eq. 5.4 at 100 Hz: sigma_v = 0.068 sqrt(100) deg/s,
+#: sigma_w = 0.00029 sqrt(100) deg/s^2.
 SIGMA_V, SIGMA_W = 0.68, 0.0029
 #: Rate-state driving noise of the thesis's filters (section 8.2, chapter 10), deg/s^2.
 SIGMA_OMEGA = 1e3
@@ -170,7 +177,7 @@ def averaging_rate_std(
 
 @dataclass(frozen=True)
 class ArrayModel:
-    """Seed 004's gyro-board state-space model (eqs. 6.4-6.9, 6.34-6.35).
+    """Koldbæk and Totu's (2011) gyro-board state-space model (eqs. 6.4-6.9, 6.34-6.35).
 
     Parameters
     ----------

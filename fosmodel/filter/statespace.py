@@ -3,7 +3,7 @@
 A fitted :class:`~fosmodel.models.baselines.ARModel`,
 :class:`~fosmodel.models.baselines.GaussMarkovModel` or linear
 :class:`~fosmodel.models.model.FOSModel` becomes the companion-form shaping filter that
-augments a Kalman filter error state (seed 000, eqs. 5.6-5.7)::
+augments a Kalman filter error state (Park 2004, eqs. 5.6-5.7)::
 
     x[n] = Phi x[n-1] + B u[n] + G w[n],    y[n] = H x[n] + D u[n] + mu,    var(w) = Q,
 
@@ -38,6 +38,12 @@ compensation is the feedthrough ``D u``, ``D`` holding the weights ``w_j`` in th
 A FOS model with any term of degree 2 or more (products of output lags, output times input,
 powers) becomes a :class:`NonlinearStateSpace` for an extended Kalman filter: the same state
 and inputs, the transition ``f(x, u)`` and its analytic Jacobian.
+
+References
+----------
+.. [1] M. Park, "Error Analysis and Stochastic Modeling of MEMS based Inertial Sensors for Land
+   Vehicle Navigation Applications", M.Sc. thesis, UCGE Report 20194, Department of
+   Geomatics Engineering, University of Calgary, 2004.
 """
 
 from __future__ import annotations
@@ -640,7 +646,7 @@ def position_velocity_error_model(error: StateSpace, dt: float, *,
                                   bias: str = "compensated") -> StateSpace:
     """Build a 1-D position / velocity error state driven by an accelerometer error model.
 
-    Seed 000, eq. 5.7: ``dp[k] = dp[k-1] + dt dv[k-1]``, ``dv[k] = dv[k-1] + dt da[k-1]``
+    Park (2004), eq. 5.7: ``dp[k] = dp[k-1] + dt dv[k-1]``, ``dv[k] = dv[k-1] + dt da[k-1]``
     with ``da = H_e x_e`` the error model's output deviation, and the error model's own
     states below.
 

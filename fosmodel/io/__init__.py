@@ -16,10 +16,10 @@ from typing import TYPE_CHECKING
 from .._lazy import attach
 
 if TYPE_CHECKING:
-    from .figures import figure_problems, fit_title, legend_outside, plain_formatter, tidy
+    from .figures import tidy
     from .formats import FORMATS
     from .loader import load_record, parse_scales
-    from .model_file import read_model, write_model
+    from .model_file import write_model
     from .output import atomic_write, save_figure, write_tables, write_text
     from .record import Record
     from .samples import load_mpu6050_static, mpu6050_static_path
@@ -28,10 +28,10 @@ if TYPE_CHECKING:
     from .topics import imu_topics, read_topic
 else:
     __getattr__, __dir__ = attach(__name__, {
-        "figures": ("figure_problems", "fit_title", "legend_outside", "plain_formatter", "tidy"),
+        "figures": ("tidy",),
         "formats": ("FORMATS",),
         "loader": ("load_record", "parse_scales"),
-        "model_file": ("read_model", "write_model"),
+        "model_file": ("write_model",),
         "output": ("atomic_write", "save_figure", "write_tables", "write_text"),
         "record": ("Record",),
         "samples": ("load_mpu6050_static", "mpu6050_static_path"),
@@ -42,7 +42,6 @@ else:
 
 __all__ = [
     "FORMATS", "ImuTopic", "Record", "Split", "SplitSpec", "TopicError", "atomic_write",
-    "figure_problems", "fit_title", "imu_topics", "legend_outside", "load_mpu6050_static",
-    "load_record", "mpu6050_static_path", "parse_scales", "plain_formatter", "read_model",
+    "imu_topics", "load_mpu6050_static", "load_record", "mpu6050_static_path", "parse_scales",
     "read_topic", "save_figure", "tidy", "write_model", "write_tables", "write_text",
 ]

@@ -1,6 +1,6 @@
 """A record's three segments: training, evaluation (model choices) and prediction (the score).
 
-The harness splits by duration (the FOS paper's 3 min + 3 min, the rest predicted), the
+The harness splits by duration (Tamazin et al.'s (2013) 3 min + 3 min, the rest predicted), the
 residual loop by fraction; both judge a model on a segment it was not fitted on, and choose
 nothing on the prediction segment.  :class:`SplitSpec` is a split as a user gives it, before
 the record is read: each length a duration or a percent of the record.

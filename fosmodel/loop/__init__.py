@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from .config import LoopConfig
     from .diagnose import Finding, least_squares_spectrum
     from .driver_forms import DriverForms, slow_driver
-    from .effects import CandidateFamily, Effect, make
+    from .effects import CandidateFamily, Effect, make_effect
     from .handoff import Handoff, hand_off, refit_on_all
     from .loop_report import evaluation_text, write_loop_report
     from .record import LoopRecord
@@ -32,7 +32,7 @@ else:
         "config": ("LoopConfig",),
         "diagnose": ("Finding", "least_squares_spectrum"),
         "driver_forms": ("DriverForms", "slow_driver"),
-        "effects": ("CandidateFamily", "Effect", "make"),
+        "effects": ("CandidateFamily", "Effect", "make_effect"),
         "handoff": ("Handoff", "hand_off", "refit_on_all"),
         "loop_report": ("evaluation_text", "write_loop_report"),
         "record": ("LoopRecord",),
@@ -43,7 +43,7 @@ else:
 __all__ = [
     "CandidateFamily", "DriverForms", "Effect", "Finding", "Handoff", "LoopConfig",
     "LoopRecord", "LoopResult", "Session", "SessionsResult", "Step", "close_loop",
-    "close_sessions", "evaluation_text", "hand_off", "least_squares_spectrum", "make",
+    "close_sessions", "evaluation_text", "hand_off", "least_squares_spectrum", "make_effect",
     "refit_on_all", "score_family", "score_sessions", "slow_driver", "write_loop_report",
     "write_sessions_report",
 ]

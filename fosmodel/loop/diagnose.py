@@ -20,6 +20,12 @@ wander         CUSUM against the Brownian bridge, Newey-West long-run var      l
 step           the same CUSUM, batch-means long-run variance less the shift    step
 allan          Allan deviation at long tau over its white-noise value (chi2)   (nothing)
 =============  ==============================================================  ============
+
+References
+----------
+.. [1] M. El-Diasty, A. El-Rabbany and S. Pagiatakis, "Stochastic Characteristics of
+   Temperature-Dependent MEMS-Based Inertial Sensor Error", Proceedings of the ION
+   National Technical Meeting, San Diego, CA, 2007.
 """
 
 from __future__ import annotations
@@ -174,7 +180,7 @@ def whiteness(residual: np.ndarray, lags: int = 20, alpha: float = ALPHA) -> Fin
 
 
 def least_squares_spectrum(x: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray]:
-    """Fraction of the variance explained by a sinusoid at each Fourier frequency (seed 001 eq. 11).
+    """Variance fraction explained by a sinusoid at each Fourier frequency (El-Diasty et al. 2007).
 
     For equally spaced samples the sinusoids at the Fourier frequencies ``k/T``
     are orthogonal to the mean and to each other, so the least-squares (Lomb-

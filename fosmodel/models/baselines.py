@@ -8,8 +8,18 @@ baselines alike.  All of them share the convention of :mod:`fosmodel.models.dyna
     y[n] - mu = sum_k phi_k (y[n-k] - mu) + e[n],   var(e) = sigma2,
 
 with ``mu`` the training mean, used by every method alike.  The estimators are statsmodels'
-(FOS paper, section 3); their return conventions are mapped onto this one in a single place,
+(Tamazin et al. 2013, section 3); their return conventions are mapped onto this one in a single
+place,
 :func:`_to_dynamics`.
+
+References
+----------
+.. [1] M. Tamazin, A. Noureldin and M. J. Korenberg, "Robust Modeling of Low-Cost MEMS Sensor
+   Errors in Mobile Devices Using Fast Orthogonal Search", Journal of Sensors (Hindawi),
+   2013, Article ID 101820.
+.. [2] M. Park, "Error Analysis and Stochastic Modeling of MEMS based Inertial Sensors for Land
+   Vehicle Navigation Applications", M.Sc. thesis, UCGE Report 20194, Department of
+   Geomatics Engineering, University of Calgary, 2004.
 """
 
 from __future__ import annotations
@@ -62,8 +72,8 @@ class _Convention(NamedTuple):
     """How a statsmodels estimator reports its AR weights and innovation scale.
 
     ``sign`` is +1 when it returns the regression weights ``phi`` and -1 when it returns the
-    characteristic polynomial's ``a = -phi`` (FOS paper, eq. 3); ``scale`` is ``"std"`` for
-    an innovation standard deviation and ``"variance"`` for a variance.
+    characteristic polynomial's ``a = -phi`` (Tamazin et al. 2013, eq. 3); ``scale`` is
+    ``"std"`` for an innovation standard deviation and ``"variance"`` for a variance.
     """
 
     sign: float
@@ -304,8 +314,8 @@ class ARModel(_LinearAR):
     order : int
         p >= 1, the number of AR weights.
     method : {"burg", "yule_walker", "covariance"}
-        Estimator (FOS paper, section 3), all from statsmodels on the record centred on its
-        training mean: ``"yule_walker"`` is ``yule_walker(method="mle")`` (biased
+        Estimator (Tamazin et al. 2013, section 3), all from statsmodels on the record centred on
+        its training mean: ``"yule_walker"`` is ``yule_walker(method="mle")`` (biased
         autocovariances, always stable), ``"covariance"`` is forward least squares
         (``AutoReg(trend="n")``, may be unstable), ``"burg"`` is ``burg`` (always stable).
 
@@ -314,7 +324,8 @@ class ARModel(_LinearAR):
     mean_ : float
         Training mean ``mu``.
     coef_ : ndarray of shape (order,)
-        ``phi_1 .. phi_p``, positive regression sign (the FOS paper's ``a_k`` are ``-phi_k``).
+        ``phi_1 .. phi_p``, positive regression sign (the ``a_k`` of Tamazin et al. 2013 are
+        ``-phi_k``).
     sigma2_ : float
         Innovation variance ``var(e)``.
     method_ : str
@@ -377,7 +388,7 @@ class ARModel(_LinearAR):
         self._check_fitted()
         info = [("Method", self.method_), ("Order p", f"{self.order}"), *self._common_info()]
         notes = [
-            "y[n] - mu = sum_k phi_k (y[n-k] - mu) + e[n]; the FOS paper's a_k are -phi_k.",
+            "y[n] - mu = sum_k phi_k (y[n-k] - mu) + e[n]; Tamazin et al.'s (2013) a_k are -phi_k.",
             _METHOD_NOTES[self.method_],
         ]
         if not self.is_stable():

@@ -2,7 +2,7 @@
 
 Convention (one place for all methods): ``y[n] - mu = sum_k phi[k-1] (y[n-k] - mu) + e[n]``,
 ``phi`` the AR weights with the *positive* sign of a regression (statsmodels' ``burg`` and
-``yule_walker`` return them this way; the FOS paper's ``a_k`` of eq. 3 are ``-phi``).
+``yule_walker`` return them this way; Tamazin et al.'s (2013) ``a_k`` of eq. 3 are ``-phi``).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """FOSModel: a Fast Orthogonal Search difference-equation model of a time series.
 
-The model (FOS paper, eqs. 14-15) is
+The model (Tamazin et al. 2013, eqs. 14-15) is
 
     y[n] - mu_y = a_0 + sum_m a_m P_m[n] + e[n],
 
@@ -11,6 +11,14 @@ chosen by :func:`fosmodel.core.fos.fos_search` among all such
 candidates up to the cross-product degree.  Centring on the training means
 (``center=True``) makes the selected terms independent of the sensor bias:
 adding an offset to the record leaves the model unchanged but for ``mu``.
+
+References
+----------
+.. [1] M. J. Korenberg, "A robust orthogonal algorithm for system identification and
+   time-series analysis", Biological Cybernetics 60(4), 267-276, 1989.
+.. [2] M. Tamazin, A. Noureldin and M. J. Korenberg, "Robust Modeling of Low-Cost MEMS Sensor
+   Errors in Mobile Devices Using Fast Orthogonal Search", Journal of Sensors (Hindawi),
+   2013, Article ID 101820.
 """
 
 from __future__ import annotations

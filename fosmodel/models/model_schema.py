@@ -45,7 +45,7 @@ _ADDED_IN = {2: {"coef_se": lambda n_terms: [math.nan] * n_terms,
 #: Candidates no fit searches (its correlation tables hold a row per candidate): a file asking
 #: for more is refused before anything is counted or allocated for it.
 MAX_CANDIDATES = 10**7
-#: Factors of a product (the FOS paper's cross-products have two or three).
+#: Factors of a product (Tamazin et al.'s (2013) cross-products have two or three).
 MAX_DEGREE = 32
 #: The largest magnitude of a number in a model file (the loader refuses larger values).
 MAX_ABS = 1e30

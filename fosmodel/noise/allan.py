@@ -11,6 +11,14 @@ graphical read-offs of the curve, for comparison with the fit.
 
 The IEEE Std 952 noise fit is :mod:`fosmodel.noise.allan_fit`; the figure and the
 files written, :mod:`fosmodel.noise.allan_report`.
+
+References
+----------
+.. [1] IEEE Std 952-1997, "IEEE Standard Specification Format Guide and Test Procedure for
+   Single-Axis Interferometric Fiber Optic Gyros", IEEE, 1997.
+.. [2] M. El-Diasty, A. El-Rabbany and S. Pagiatakis, "Stochastic Characteristics of
+   Temperature-Dependent MEMS-Based Inertial Sensor Error", Proceedings of the ION
+   National Technical Meeting, San Diego, CA, 2007.
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """The IEEE Std 952 noise terms and their fit to an Allan deviation.
 
-:func:`fit_noise` fits the IEEE Std 952 model (seed 001 section 2.1, seed 004 eq. 4.17)::
+:func:`fit_noise` fits the IEEE Std 952 model (El-Diasty et al. 2007, section 2.1; Koldbæk and
+Totu 2011, eq. 4.17)::
 
     sigma^2(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln 2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2
 
@@ -37,6 +38,17 @@ Each term is defined here, at the top: its Allan variance (:func:`_basis`), its 
 spectrum (:func:`_spectrum`, for the covariance of the estimates), its name and its
 navigation units.  :class:`NoiseFit` holds a fit's coefficients, errors, limits and
 read-offs, and says them (``summary``, ``conventions``, ``to_dict``).
+
+References
+----------
+.. [1] IEEE Std 952-1997, "IEEE Standard Specification Format Guide and Test Procedure for
+   Single-Axis Interferometric Fiber Optic Gyros", IEEE, 1997.
+.. [2] M. El-Diasty, A. El-Rabbany and S. Pagiatakis, "Stochastic Characteristics of
+   Temperature-Dependent MEMS-Based Inertial Sensor Error", Proceedings of the ION
+   National Technical Meeting, San Diego, CA, 2007.
+.. [3] S. K. Koldbæk and L.-C. Totu, "Improving MEMS Gyroscope Performance using Homogeneous
+   Sensor Fusion", Master's thesis, Department of Electronic Systems, Aalborg University,
+   2011.
 """
 
 from __future__ import annotations

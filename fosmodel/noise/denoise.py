@@ -1,9 +1,18 @@
 """Low-pass denoising of inertial records before the AR baselines are fitted.
 
-The FOS paper (section 5) fits the Yule-Walker, covariance and Burg models to wavelet-denoised
+Tamazin et al. (2013, section 5) fit the Yule-Walker, covariance and Burg models to wavelet-denoised
 data ("wavelet denoising of up to 4 levels of decomposition") while FOS gets the raw record;
 Skaloud's Kaiser-window FIR low pass (8 Hz cut-off, 100 dB stop band) is the other common
 choice.  :func:`denoise` selects one by name so each method can be run on its own protocol.
+
+References
+----------
+.. [1] M. Tamazin, A. Noureldin and M. J. Korenberg, "Robust Modeling of Low-Cost MEMS Sensor
+   Errors in Mobile Devices Using Fast Orthogonal Search", Journal of Sensors (Hindawi),
+   2013, Article ID 101820.
+.. [2] M. El-Diasty, A. El-Rabbany and S. Pagiatakis, "Stochastic Characteristics of
+   Temperature-Dependent MEMS-Based Inertial Sensor Error", Proceedings of the ION
+   National Technical Meeting, San Diego, CA, 2007.
 """
 
 from __future__ import annotations
@@ -26,7 +35,7 @@ def wavelet_band_hz(rate: float, levels: int) -> float:
     """Upper edge of the band kept by :func:`wavelet_lowpass`: ``rate / 2**(levels + 1)``.
 
     The level-L approximation is sampled at ``rate / 2**L`` and so spans 0 to half of that:
-    6.25 Hz for 4 levels at 200 Hz, where the FOS paper states 12.5 Hz (the approximation's
+    6.25 Hz for 4 levels at 200 Hz, where Tamazin et al. (2013) state 12.5 Hz (the approximation's
     *sampling* rate, or the band of 3 levels).
     """
     return check_positive(rate, "rate") / 2 ** (check_int(levels, "levels", 1) + 1)
@@ -41,7 +50,7 @@ def wavelet_lowpass(y: ArrayLike, levels: int = 4, wavelet: str = "db4") -> np.n
     the two ends of a drifting sensor record.
 
     The band kept is nominally 0 to ``rate / 2**(levels + 1)`` (:func:`wavelet_band_hz`):
-    6.25 Hz for 4 levels at 200 Hz.  The FOS paper reports 12.5 Hz for "4 levels" at 200 Hz,
+    6.25 Hz for 4 levels at 200 Hz.  Tamazin et al. (2013) report 12.5 Hz for "4 levels" at 200 Hz,
     which is ``rate / 2**levels``; to keep 0-12.5 Hz at 200 Hz use ``levels=3``.  The edge is
     gradual (db4 has 4 vanishing moments), not a brick wall.
 
@@ -161,7 +170,7 @@ def denoise(y: ArrayLike, rate: float | None, method: str | None) -> np.ndarray:
         Sampling rate in Hz (needed by ``"kaiser"`` only).
     method : {None, "none", "wavelet", "kaiser"}
         ``None``/``"none"``: a copy of ``y``; ``"wavelet"``: :func:`wavelet_lowpass` with 4
-        levels of db4 (FOS paper); ``"kaiser"``: :func:`kaiser_lowpass` at 8 Hz, 2 Hz
+        levels of db4 (Tamazin et al. 2013); ``"kaiser"``: :func:`kaiser_lowpass` at 8 Hz, 2 Hz
         transition, 100 dB (Skaloud, seed paper 001).
 
     Returns

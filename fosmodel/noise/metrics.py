@@ -2,7 +2,7 @@
 
 Two kinds of position error are computed here.
 
-* :func:`equivalent_position_error` is the FOS paper's metric (Tables 1-2): the
+* :func:`equivalent_position_error` is Tamazin et al.'s (2013) metric (Tables 1-2): the
   position error after ``T`` seconds (3600 s in the paper) of an error whose RMS
   equals ``sqrt(MSE)`` held constant, ``0.5 sqrt(MSE) T^2`` for an accelerometer
   and ``g sqrt(MSE) T^3 / 6`` for a gyroscope (rate in rad/s, ``g = 9.81``).
@@ -14,7 +14,13 @@ Two kinds of position error are computed here.
 
 Two gravities appear and are kept apart: :data:`STANDARD_GRAVITY` (9.80665 m/s^2)
 converts readings in ``"g"`` and ``"mg"`` to m/s^2, while :data:`PAPER_GRAVITY`
-(9.81 m/s^2, the FOS paper's value) turns a tilt error into an acceleration error.
+(9.81 m/s^2, Tamazin et al.'s (2013) value) turns a tilt error into an acceleration error.
+
+References
+----------
+.. [1] M. Tamazin, A. Noureldin and M. J. Korenberg, "Robust Modeling of Low-Cost MEMS Sensor
+   Errors in Mobile Devices Using Fast Orthogonal Search", Journal of Sensors (Hindawi),
+   2013, Article ID 101820.
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ from ..core.validation import as_signal, check_positive, did_you_mean
 
 #: Standard gravity in m/s^2, used only to convert the units "g" and "mg".
 STANDARD_GRAVITY = 9.80665
-#: Gravity of the FOS paper's gyroscope position error, g * tilt -> acceleration error.
+#: Gravity of Tamazin et al.'s (2013) gyroscope position error, g * tilt -> acceleration error.
 PAPER_GRAVITY = 9.81
 
 _SI_SCALES: dict[str, dict[str, float]] = {
@@ -118,7 +124,7 @@ def sensor_of(units: str) -> str:
 def equivalent_position_error(
     mse: float, sensor: str, units: str, horizon_s: float = 3600.0, g: float = PAPER_GRAVITY
 ) -> float:
-    """Return the FOS paper's position error (m) of a model MSE after ``horizon_s`` seconds.
+    """Return Tamazin et al.'s (2013) position error (m) of a model MSE after ``horizon_s`` seconds.
 
     With ``s = sqrt(mse)`` in SI units and ``T = horizon_s``: accelerometer
     ``0.5 s T^2``; gyroscope ``g s T^3 / 6`` (s in rad/s), i.e. a constant error of
@@ -183,7 +189,8 @@ def metric_definitions(units: str | None, horizon_s: float, n_starts: int, predi
         "mse": f"MSE ({u})^2: the mean square of the one-step prediction error on {predict}.",
         "evaluate_mse": f"Evaluate MSE ({u})^2: the same on {evaluate}, where each method's "
                         "order (and level) is chosen.",
-        "position_error_m": "Position error (m): the FOS paper's equivalent position error, "
+        "position_error_m": "Position error (m): the equivalent position error of "
+                            "Tamazin et al. (2013), "
                             "T = 3600 s: an error of constant size sqrt(MSE) integrated freely "
                             "for an hour, 0.5 sqrt(MSE) T^2 for an accelerometer and "
                             "g sqrt(MSE) T^3 / 6 for a gyroscope (rad/s, g = 9.81 m/s^2). It "

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from .._lazy import attach
 
 if TYPE_CHECKING:
-    from .distributed import connect, local_client
+    from .distributed import connect_scheduler, local_client
     from .harness import StudyConfig, StudyPlan, StudyResult, plan_study
     from .report import level_table, order_figure, paper_table, study_table, write_study
     from .runner import run_studies, run_study
@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     )
 else:
     __getattr__, __dir__ = attach(__name__, {
-        "distributed": ("connect", "local_client"),
+        "distributed": ("connect_scheduler", "local_client"),
         "harness": ("StudyConfig", "StudyPlan", "StudyResult", "plan_study"),
         "report": ("level_table", "order_figure", "paper_table", "study_table", "write_study"),
         "runner": ("run_studies", "run_study"),
@@ -41,9 +41,9 @@ else:
     })
 
 __all__ = [
-    "StudyConfig", "StudyPlan", "StudyResult", "TableModel", "concatenate_plateaus", "connect",
-    "global_models", "held_out_comparison", "level_table", "local_client", "order_figure",
-    "paper_table", "plan_study", "run_studies", "run_study", "segment_noise", "segment_table",
-    "study_table", "temperature_inputs", "temperature_segments", "term_standard_errors",
-    "write_study",
+    "StudyConfig", "StudyPlan", "StudyResult", "TableModel", "concatenate_plateaus",
+    "connect_scheduler", "global_models", "held_out_comparison", "level_table", "local_client",
+    "order_figure", "paper_table", "plan_study", "run_studies", "run_study", "segment_noise",
+    "segment_table", "study_table", "temperature_inputs", "temperature_segments",
+    "term_standard_errors", "write_study",
 ]

@@ -41,7 +41,7 @@ WORKER_ENV = {"OMP_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1, "MKL_NUM_THREADS"
               "MALLOC_TRIM_THRESHOLD_": None}
 
 
-def connect(address: str, timeout: float = 10.0) -> Client:
+def connect_scheduler(address: str, timeout: float = 10.0) -> Client:
     """Connect a client to the Dask scheduler at ``address`` (e.g. ``tcp://10.0.0.5:8786``).
 
     Raises

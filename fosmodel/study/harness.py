@@ -1,6 +1,6 @@
 """Train / evaluate / predict harness: every method fit, selected and scored the same way.
 
-As in section 5 of the FOS paper, a record is split by duration into a
+As in section 5 of Tamazin et al. (2013), a record is split by duration into a
 training segment (3 min), an evaluation segment (3 min) and the novel
 prediction segment (the rest).  Every configuration (method, order, degree) is
 fit on the training samples alone; each method's best configuration is the
@@ -32,6 +32,12 @@ denoises the record and lists the fits (:class:`FitTask`), :func:`run_task`
 fits and scores one with one BLAS thread (so that it gives the same bits in any
 process), and :func:`assemble` makes the rows.  :mod:`fosmodel.study.runner` runs the tasks
 of one or several studies, in this process or on a Dask cluster.
+
+References
+----------
+.. [1] M. Tamazin, A. Noureldin and M. J. Korenberg, "Robust Modeling of Low-Cost MEMS Sensor
+   Errors in Mobile Devices Using Fast Orthogonal Search", Journal of Sensors (Hindawi),
+   2013, Article ID 101820.
 """
 
 from __future__ import annotations

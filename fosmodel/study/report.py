@@ -1,6 +1,6 @@
 """Study reports: tables (Markdown, CSV, LaTeX) and figures (PNG, SVG) for papers and reports.
 
-The comparison table follows the layout of the FOS paper's Tables 1-2 (a block
+The comparison table follows the layout of Tamazin et al.'s (2013) Tables 1-2 (a block
 per model order, a row per method) with the outage metrics added; the figure
 is the paper's Figures 6-7 (prediction MSE against model order, log scale)
 with the 30 s outage position error beside it.  Every file is written
@@ -177,7 +177,8 @@ def write_study(result: StudyResult, out_dir: Path, title: str) -> list[Path]:
                         segment_text("prediction", result.split.predict, result.config.rate))
     tables = {
         "comparison": (paper_table(result), f"{title}: prediction and outage errors of every "
-                       f"method at model orders {orders} (the FOS paper's Tables 1-2 layout). "
+                       f"method at model orders {orders} (the layout of "
+                       "Tamazin et al. 2013, Tables 1-2). "
                        f"{note}"),
         "study": (study_table(result), f"{title}: every configuration scored. {note}"),
         "best": (study_table(result, result.best()),
@@ -213,8 +214,8 @@ def report_markdown(result: StudyResult, title: str) -> str:
         "denoised data, FOS on raw data; fair protocol: every method on raw data. Errors are "
         "one-step prediction errors on the prediction segment; outage metrics are free runs of "
         f"{cfg.horizon_s:g} s from {cfg.n_starts} starts across it.", "",
-        f"## Comparison at orders {' and '.join(map(str, table_orders(result)))} (FOS paper, "
-        "Tables 1-2 layout)", "",
+        f"## Comparison at orders {' and '.join(map(str, table_orders(result)))} "
+        "(Tamazin et al. 2013, Tables 1-2 layout)", "",
         markdown_table(paper_table(result), digits=4), "",
         *_definitions(result), "",
         "## Best configuration per method (chosen on the evaluation segment)", "",

@@ -100,9 +100,9 @@ def dask_client(scheduler: str | None = None, workers: int | None = None,
         Dask is not installed (the message names the extra to install).
     """
     if scheduler:
-        from .distributed import connect
+        from .distributed import connect_scheduler
 
-        return connect(scheduler, timeout)
+        return connect_scheduler(scheduler, timeout)
     if workers:
         from .distributed import local_client
 

@@ -1,7 +1,7 @@
-"""Temperature-dependent error models of a thermal-chamber record (seed 001).
+"""Temperature-dependent error models of a thermal-chamber record (El-Diasty et al. 2007).
 
-Seed 001 holds a MEMS IMU at chamber temperatures from -30 to +60 C and reports, per
-temperature, the white-noise coefficient (ARW/VRW, Table 1) and a first-order AR coefficient
+El-Diasty et al. (2007) hold a MEMS IMU at chamber temperatures from -30 to +60 C and report,
+per temperature, the white-noise coefficient (ARW/VRW, Table 1) and a first-order AR coefficient
 with its standard error (Table 2).  This module does the same on a record with a temperature
 column, and sets the per-temperature approach against one FOS model with temperature as an
 exogenous input:
@@ -18,6 +18,12 @@ exogenous input:
   its square fitted across the training plateaus (:func:`global_models`), and the same FOS
   model without temperature, leaving one plateau out at a time (one-step MSE and free-run
   outage metrics).
+
+References
+----------
+.. [1] M. El-Diasty, A. El-Rabbany and S. Pagiatakis, "Stochastic Characteristics of
+   Temperature-Dependent MEMS-Based Inertial Sensor Error", Proceedings of the ION
+   National Technical Meeting, San Diego, CA, 2007.
 """
 
 from __future__ import annotations
@@ -193,9 +199,10 @@ def segment_table(
     """Error model per plateau: bias, noise level and AR(``order``) coefficients with SEs.
 
     Each plateau gets ``FOSModel(max_lag=order, stop="max_terms", max_terms=order)``, the
-    least-squares AR(``order``) model whose terms FOS orders by their MSE reduction (seed 001
-    Table 2 is the case ``order=1``), and :func:`term_standard_errors`.  The bias is the
-    plateau mean; its standard error comes from the fitted model's long-run variance,
+    least-squares AR(``order``) model whose terms FOS orders by their MSE reduction
+    (El-Diasty et al. 2007, Table 2 is the case ``order=1``), and
+    :func:`term_standard_errors`.  The bias is the plateau mean; its standard error comes from
+    the fitted model's long-run variance,
     ``sqrt(s_e^2 / n) / |1 - sum_l a_l|`` (the AR spectrum at zero frequency), which is
     ``sigma / sqrt(n)`` for white noise and larger for positively correlated noise.
 
@@ -229,7 +236,7 @@ def segment_table(
 def segment_noise(
     y: ArrayLike, rate: float, segments: Sequence[slice], sensor: str, units: str
 ) -> pd.DataFrame:
-    """Allan white-noise coefficient per plateau in navigation units (seed 001 Table 1).
+    """Allan white-noise coefficient per plateau in navigation units (El-Diasty et al. 2007).
 
     Returns
     -------

@@ -34,9 +34,12 @@ from .base import (
     effect_from_dict,
     effects_from,
     kinds,
-    make,
+    make_effect,
     register,
     unregister,
+)
+from .base import (
+    make as make,  # the older name, kept importable for existing code
 )
 from .family import CandidateFamily
 
@@ -44,4 +47,5 @@ for _module in pkgutil.iter_modules(__path__):
     importlib.import_module(f"{__name__}.{_module.name}")
 
 __all__ = ["CandidateFamily", "Effect", "Offer", "effect_class",
-           "effect_from_dict", "effects_from", "kinds", "make", "register", "unregister"]
+           "effect_from_dict", "effects_from", "kinds", "make_effect", "register",
+           "unregister"]
