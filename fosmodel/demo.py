@@ -90,12 +90,12 @@ def run_bundled_record(out_dir: Path) -> pd.DataFrame:
         rows.append({"axis": axis, "units": units,
                      "effects kept": "; ".join(s.effect.describe() for s in loop.steps) or "none",
                      "still firing": ", ".join(loop.unexplained) or "none",
-                     "one-step MSE before": loop.before["mse"],
-                     "one-step MSE after": loop.after["mse"],
+                     "one-step MSE before": loop.before.mse,
+                     "one-step MSE after": loop.after.mse,
                      "30 s outage position error before (m)":
-                         loop.before["outage_position_error_m"].get("30"),
+                         loop.before.outage_position_error_m.get(30),
                      "30 s outage position error after (m)":
-                         loop.after["outage_position_error_m"].get("30")})
+                         loop.after.outage_position_error_m.get(30)})
     table = pd.DataFrame(rows)
     print("\nResidual loop on each axis of the MPU-6050 record (prediction segment):")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))

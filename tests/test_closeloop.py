@@ -55,7 +55,7 @@ def test_loop_finds_the_effect_and_recovers_half_of_what_the_truth_gives(name, s
     record = LoopRecord.single(y, channels, rec.rate)
     family = CandidateFamily(config.max_lag).add(true, record)
     truth = score_family(y, channels, config, family)
-    metric = (lambda m: m["outage_mse"]["30"]) if slow else (lambda m: m["mse"])
+    metric = (lambda m: m.outage_mse[30]) if slow else (lambda m: m.mse)
     before, after = metric(res.before), metric(res.after)
     assert before - after >= 0.5 * (before - metric(truth)) > 0
 
@@ -100,7 +100,7 @@ def test_a_random_walk_bias_is_taken_as_a_level_not_a_function_of_time():
     kinds = [s.effect.kind for s in res.steps]
     assert kinds[:1] == ["level"] and "drift" not in kinds
     assert res.steps[0].tau_s in res.level_taus
-    assert res.after["bias_rms"]["30"] < res.before["bias_rms"]["30"]
+    assert res.after.bias_rms[30] < res.before.bias_rms[30]
     assert not res.worse()
 
 

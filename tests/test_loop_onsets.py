@@ -30,7 +30,7 @@ def test_a_step_a_third_of_the_way_in_is_kept_and_lowers_the_30s_bias(seed):
     assert gains[0] is None and gains[1] is None and gains[2] is not None
     assert "judged from the origins at 375 s on" in step.judgement.note
     assert any(n.startswith(f"{step.effect.describe()}: judged from") for n in res.notes)
-    assert res.after["bias_rms"]["30"] <= 0.3 * res.before["bias_rms"]["30"]
+    assert res.after.bias_rms[30] <= 0.3 * res.before.bias_rms[30]
 
 
 def test_the_origins_before_an_onset_or_too_soon_after_it_cannot_judge():

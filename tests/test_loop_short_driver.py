@@ -34,7 +34,7 @@ def test_a_driver_that_runs_as_time_does_on_ten_minutes_is_named(seed):
     res = _loop(make_scenario("short_driver", seed=seed))
     assert [s.effect.channel for s in res.steps if s.effect.kind == "driver"] == ["temp_c"]
     assert not any(s.effect.kind in ("drift", "step") for s in res.steps)
-    assert res.after["bias_rms"]["30"] <= 0.5 * res.before["bias_rms"]["30"]
+    assert res.after.bias_rms[30] <= 0.5 * res.before.bias_rms[30]
     (note,) = [n for n in res.notes if n.startswith("temp_c runs as time does")]
     assert "shorter than the 4000 s (200 blocks of 20 s)" in note and "8000 s" in note
 
@@ -56,7 +56,7 @@ def test_the_mpu6050_die_temperature_is_named_on_ay_g():
     channels = {c: frame[c].to_numpy() for c in frame.columns if c not in ("t_s", "ay_g")}
     res = close_loop(y, channels, LoopConfig(rate=rate, sensor="accel", units="g"))
     assert [s.effect.channel for s in res.steps if s.effect.kind == "driver"] == ["temp_c"]
-    assert res.after["bias_rms"]["30"] <= 0.5 * res.before["bias_rms"]["30"]
+    assert res.after.bias_rms[30] <= 0.5 * res.before.bias_rms[30]
     # beside a trend in time the die temperature is no evidence of itself over 327 s
     record = LoopRecord.single(y, {"temp_c": channels["temp_c"]}, rate)
     fit = (res.segments.train,)

@@ -55,7 +55,7 @@ def test_the_shared_temperature_sensitivity_is_named_and_recovered(result, sweep
     assert weights[f"pow(temp_c,1,{centre:.8g})"] == pytest.approx(slope, rel=0.2)
     # judged on every session held out, the comparisons pooled
     assert len(step.judgement.sessions) == 3 and step.judgement.origins_s == ()
-    assert result.after["bias_rms"]["1800"] < 0.5 * result.before["bias_rms"]["1800"]
+    assert result.after.bias_rms[1800] < 0.5 * result.before.bias_rms[1800]
     assert not result.worse()
 
 

@@ -51,7 +51,7 @@ def test_a_known_temperature_sensitivity_is_recovered_with_the_level_in_the_mode
     assert any(t.startswith("level@") for t in model.terms_)
     slow = next(s for s in res.steps if s.effect.kind == "driver")
     assert slow.effect.level_taus or any(s.effect.kind == "level" for s in res.steps)
-    assert res.after["bias_rms"]["300"] < 0.5 * res.before["bias_rms"]["300"]
+    assert res.after.bias_rms[300] < 0.5 * res.before.bias_rms[300]
     assert not res.worse()
 
 
@@ -159,5 +159,5 @@ def test_an_origin_whose_past_is_a_steady_ramp_does_not_judge_the_driver():
     (slow,) = [s for s in res.steps if s.effect.kind == "driver"]
     assert slow.effect.channel == "temp_c" and slow.effect.part == "slow"
     assert slow.judgement.gains(slow.judgement.kept_on)[:2] == [None, None]
-    assert res.after["bias_rms"]["1800"] < 0.8 * res.before["bias_rms"]["1800"]
+    assert res.after.bias_rms[1800] < 0.8 * res.before.bias_rms[1800]
     assert not res.worse()

@@ -29,8 +29,7 @@ from ..io.output import (
     writable_file,
     write_text,
 )
-from ..noise.axes import SENSORS, Axis, infer_axis, resolve_axes
-from ..noise.metrics import is_sensor_units
+from ..noise.axes import SENSORS, Axis, column_sensor, resolve_axes
 from .flags import with_flags
 
 if TYPE_CHECKING:
@@ -116,12 +115,8 @@ def _axes(args: argparse.Namespace, columns: list[str], rec: Record,
     ``Accel X (g)``), as every command reads them; none if ``optional`` and none is told.
     """
     per_sensor = {s: units for s in SENSORS if (units := vars(args).get(f"{s}_units"))}
-    named = all(None not in infer_axis(c) for c in columns)
-    if optional and not (args.sensor or args.units or per_sensor or named
-                         or any(is_sensor_units(rec.units.get(c, "")) for c in columns)):
-        return []
     return resolve_axes(columns, per_sensor, given=args.units, declared=rec.units,
-                        sensor=args.sensor)
+                        sensor=args.sensor, optional=optional)
 
 
 def fit(args: argparse.Namespace) -> int:
@@ -329,9 +324,9 @@ def close_loop(args: argparse.Namespace) -> int:
         names = [n for n in [*r.names, *held] if n != args.column]
         try:
             axis = _axes(args, [args.column], r, optional=True)
-            roles = channel_roles(names, axis[0].sensor if axis else _sensor_of(r, args.column),
-                                  aux=args.aux or (),
-                                  sensors={c: s for c in names if (s := _sensor_of(r, c))})
+            sensor = axis[0].sensor if axis else column_sensor(args.column, r.units)
+            roles = channel_roles(names, sensor, aux=args.aux or (), sensors={
+                c: s for c in names if (s := column_sensor(c, r.units))})
         except (InputError, OptionError):  # said by the checks below
             return [args.column]
         drivers[:] = [*roles.slow, *roles.opted_in]
@@ -344,14 +339,14 @@ def close_loop(args: argparse.Namespace) -> int:
     axis = _axes(args, [args.column], rec, optional=True)
     channels = [{name: r.column(name) for name in r.names if name != args.column}
                 for r in recs]
-    sensor = axis[0].sensor if axis else _sensor_of(rec, args.column)
+    sensor = axis[0].sensor if axis else column_sensor(args.column, rec.units)
     if args.column in (args.aux or ()):
         raise InputError(f"--aux {args.column}: the modelled column cannot explain its own "
                          "residual")
     train, evaluate = args.split.fractions(min(r.n_samples for r in recs), rec.require_rate())
     try:
-        roles = channel_roles(channels[0], sensor, aux=args.aux or (),
-                              sensors={c: s for c in channels[0] if (s := _sensor_of(rec, c))})
+        roles = channel_roles(channels[0], sensor, aux=args.aux or (), sensors={
+            c: s for c in channels[0] if (s := column_sensor(c, rec.units))})
         config = LoopConfig(rate=rec.require_rate(), sensor=axis[0].sensor if axis else None,
                             units=axis[0].units if axis else None, max_lag=args.max_lag,
                             train=train, evaluate=evaluate, horizons_s=args.horizons,
@@ -433,15 +428,6 @@ def _close_sessions(args: argparse.Namespace, recs: list[Record], channels: list
     return _loop_outputs(args, result, lambda tmp: write_sessions_report(result, tmp, title),
                          sessions_console(result), meta, out, json_path, model_path,
                          (f"residual loop report of {len(recs)} sessions", "shared model"))
-
-
-def _sensor_of(rec: Record, column: str) -> str | None:
-    """Return the sensor a column's units (as its file declares them) or its name tell, if any."""
-    from ..noise.metrics import sensor_of
-
-    if is_sensor_units(rec.units.get(column, "")):  # not a temperature's degC
-        return sensor_of(rec.units[column])
-    return infer_axis(column)[0]
 
 
 def allan(args: argparse.Namespace) -> int:

@@ -122,7 +122,7 @@ class LoopResult(LoopOutcome):
                             "mse_before": previous.mse, "mse_after": step.predict.mse})
             previous = step.predict
         found = self.ratios()
-        return {"before": self.before, "after": self.after,
+        return {"before": self.before.to_dict(), "after": self.after.to_dict(),
                 "ratios": {r.key: r.to_dict() for r in found},
                 "worse_on_prediction": [r.text() for r in found if r.verdict == "worse"],
                 "effects": effects, "rejected": [r.to_dict() for r in self.rejected],
@@ -307,7 +307,7 @@ def _driven(family: CandidateFamily) -> set[str]:
 def score_family(
     y: ArrayLike, channels: Mapping[str, ArrayLike] | None, config: LoopConfig,
     family: CandidateFamily,
-) -> dict[str, Any]:
+) -> Scores:
     """Prediction-segment numbers of a candidate family fit on the record's fitting segment.
 
     With the effects a user knows to be there, this is the yardstick of what the
@@ -320,7 +320,7 @@ def score_family(
     model = Fitter(record, segments.train, config).fit(family)
     reported = plan(segments.predict, config.horizons_s, config.rate, config.n_starts,
                     "prediction", REPORT_WINDOWS)
-    return scores(model, y, reported, config).to_dict()
+    return scores(model, y, reported, config)
 
 
 def loop_split(n: int, config: LoopConfig) -> Split:

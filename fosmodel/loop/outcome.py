@@ -69,11 +69,11 @@ class LoopOutcome:
         return self.final_model, "the loop's final model"
 
     @property
-    def before(self) -> dict[str, Any]:
-        """The starting model's numbers (:meth:`Scores.to_dict`)."""
-        return self.before_scores.to_dict()
+    def before(self) -> Scores:
+        """The starting model's predicted errors (``before_scores``)."""
+        return self.before_scores
 
     @property
-    def after(self) -> dict[str, Any]:
-        """The final model's numbers."""
-        return self.after_scores.to_dict()
+    def after(self) -> Scores:
+        """The final model's predicted errors (``after_scores``)."""
+        return self.after_scores

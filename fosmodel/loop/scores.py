@@ -51,24 +51,52 @@ class Scores:
         """The one-step mean squared error."""
         return float(np.mean(self.errors**2))
 
-    def bias_rms(self, horizon_s: float) -> float:
-        """Return the RMS over the outages of ``horizon_s`` of their mean error."""
-        return float(np.sqrt(np.mean(self.outages[horizon_s].bias ** 2)))
+    @property
+    def horizons_s(self) -> tuple[float, ...]:
+        """The outage lengths scored, in seconds."""
+        return tuple(self.outages)
+
+    @property
+    def bias_rms(self) -> dict[float, float]:
+        """Each horizon's RMS over its outages of their mean error, by seconds."""
+        with np.errstate(over="ignore"):  # a diverging run squares to inf
+            return {h: float(np.sqrt(np.mean(o.bias**2))) for h, o in self.outages.items()}
+
+    @property
+    def outage_mse(self) -> dict[float, float]:
+        """Each horizon's mean over its outages of their mean squared error, by seconds."""
+        return {h: float(np.mean(o.mse)) for h, o in self.outages.items()}
+
+    @property
+    def outage_position_error_m(self) -> dict[float, float | None]:
+        """Each horizon's RMS end-of-outage position error (None without sensor and units)."""
+        with np.errstate(over="ignore"):
+            return {h: None if o.position is None else float(np.sqrt(np.mean(o.position**2)))
+                    for h, o in self.outages.items()}
 
     def to_dict(self) -> dict[str, Any]:
-        """Return the numbers as JSON, keyed by seconds.
+        """Return the numbers as JSON, keyed by seconds (``"30"``).
 
         ``bias_rms``, the outages' MSE and their RMS position error at each horizon.
         """
         with np.errstate(over="ignore"):  # a diverging run squares to inf
-            return {
-                "mse": self.mse, "position_error_m": self.position_error_m,
-                "bias_rms": {f"{h:g}": self.bias_rms(h) for h in self.outages},
-                "outage_mse": {f"{h:g}": float(np.mean(o.mse)) for h, o in self.outages.items()},
-                "outage_position_error_m": {
-                    f"{h:g}": None if o.position is None else float(np.sqrt(np.mean(
-                        o.position**2))) for h, o in self.outages.items()},
-                "terms": list(self.terms)}
+            return {"mse": self.mse, "position_error_m": self.position_error_m,
+                    "bias_rms": _by_seconds(self.bias_rms),
+                    "outage_mse": _by_seconds(self.outage_mse),
+                    "outage_position_error_m": _by_seconds(self.outage_position_error_m),
+                    "terms": list(self.terms)}
+
+    def __getitem__(self, key: str) -> Any:  # noqa: ANN401 (the JSON entries differ in shape)
+        """Return an entry of :meth:`to_dict` (``scores["bias_rms"]["30"]``)."""
+        return self.to_dict()[key]
+
+    def __eq__(self, other: object) -> bool:
+        """Two scores are equal when their numbers are."""
+        return isinstance(other, Scores) and self.to_dict() == other.to_dict()
+
+
+def _by_seconds(values: dict[float, Any]) -> dict[str, Any]:
+    return {f"{h:g}": v for h, v in values.items()}
 
 
 @dataclass(frozen=True)

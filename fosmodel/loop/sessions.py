@@ -251,7 +251,7 @@ class SessionsResult(LoopOutcome):
                              for k, (name, c, b, a) in enumerate(zip(
                                  self.names, self.constants, self.before_sessions,
                                  self.after_sessions))],
-                "before": self.before, "after": self.after,
+                "before": self.before.to_dict(), "after": self.after.to_dict(),
                 "ratios": {r.key: r.to_dict() for r in self.ratios()},
                 "worse_on_prediction": self.worse(),
                 "effects": [{**s.effect.to_dict(), **s.chosen, "terms_added": s.terms_added,
@@ -366,7 +366,7 @@ class ManySessions:
 
 
 def score_sessions(sessions: Sequence[Session], config: LoopConfig,
-                   effects: Sequence[Effect]) -> dict[str, Any]:
+                   effects: Sequence[Effect]) -> Scores:
     """Return the pooled predicted numbers of the starting model with ``effects`` added.
 
     Fitted as :func:`close_sessions` fits (shared weights, a constant each, the same parts):
@@ -379,7 +379,7 @@ def score_sessions(sessions: Sequence[Session], config: LoopConfig,
     for effect in effects:
         family = family.add(effect, record)
     fitter = SessionFitter(record, decide, config)
-    return _pool_scores(_scores(fitter, fitter.fit(family), reported, config)).to_dict()
+    return _pool_scores(_scores(fitter, fitter.fit(family), reported, config))
 
 
 def _record(sessions: Sequence[Session], config: LoopConfig) -> tuple[LoopRecord, tuple]:

@@ -152,9 +152,20 @@ def motion_kind(column: str) -> str | None:
     return None
 
 
+def column_sensor(column: str, declared: Mapping[str, str] | None = None) -> str | None:
+    """Return the sensor a column's units (as its file ``declared`` them) or its name tell.
+
+    None if neither does; a temperature's ``degC`` tells none.
+    """
+    unit = (declared or {}).get(column, "")
+    if is_sensor_units(unit):
+        return sensor_of(unit)
+    return infer_axis(column)[0]
+
+
 def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None, *,
                  given: UnitsSpec | None = None, declared: Mapping[str, str] | None = None,
-                 sensor: str | None = None) -> list[Axis]:
+                 sensor: str | None = None, optional: bool = False) -> list[Axis]:
     """Each column's sensor and units.
 
     In this order: given with the column as ``name:sensor:units``; the units ``given`` for it,
@@ -174,6 +185,9 @@ def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None,
         Units per column that the record's file says (``Record.units`` of a ROS bag or a ULog).
     sensor : {"gyro", "accel"}, optional
         The sensor of every column: a column whose units tell another is refused.
+    optional : bool
+        Return no axes, rather than refuse, when nothing tells any (no ``units``, ``given``,
+        ``sensor``, sensor units ``declared``, and a name that does not tell them all).
 
     Raises
     ------
@@ -182,6 +196,10 @@ def resolve_axes(columns: Sequence[str], units: Mapping[str, str] | None = None,
         units of another sensor than ``sensor``, an unknown sensor or units, a column named
         twice, or units given for a column that is not among ``columns``.
     """
+    named = all(None not in infer_axis(c) for c in columns)
+    if optional and not (sensor or given or units or named or any(
+            is_sensor_units((declared or {}).get(c, "")) for c in columns)):
+        return []
     units, given = dict(units or {}), given or UnitsSpec()
     if sensor is not None and sensor not in SENSORS:
         raise InputError(f"unknown sensor {sensor!r}; valid sensors: {', '.join(SENSORS)}")
