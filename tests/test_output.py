@@ -143,7 +143,7 @@ import sys
 from fosmodel.io.output import write_text
 path, n = sys.argv[1], int(sys.argv[2])
 for i in range(n):
-    write_text(path, str(i) * 200_000)
+    write_text(path, str(i % 10) * 200_000)  # one character, the same length each time
 """
 
 
