@@ -13,6 +13,7 @@ import numpy as np
 
 from ..io.formats import FORMATS, described
 from ..io.outliers import DEFAULT_OUTLIERS, OUTLIER_K, OUTLIER_MODES, OUTLIER_SHARE
+from ..noise.exports import consumers
 from .parsing import Refused
 
 #: What a record argument may be.
@@ -185,8 +186,7 @@ def inflation(text: str) -> float:
     return value
 
 
-INFLATE_HELP = ("multiply every exported noise value (Kalibr, OpenVINS, VINS, ORB-SLAM3, PX4, "
-                "ArduPilot, MATLAB) by K for a moving platform, and say so in each file; 1 "
-                "keeps the static record's values")
+INFLATE_HELP = (f"multiply every exported noise value ({consumers()}, MATLAB) by K for a "
+                "moving platform, and say so in each file; 1 keeps the static record's values")
 STATIC_ONLY_HELP = ("analyse the longest static stretch of a record that moves (by default a "
                     "record that moves is refused: an Allan analysis needs the sensor at rest)")

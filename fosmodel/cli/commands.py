@@ -437,8 +437,10 @@ def allan(args: argparse.Namespace) -> int:
     if args.columns:
         return _allan_axes(args, out, json_path)
     if args.inflate != 1.0:
-        raise InputError("--inflate scales the exports of --columns (Kalibr, OpenVINS, VINS, "
-                         "ORB-SLAM3, PX4, ArduPilot); one --column has none")
+        from ..noise.exports import consumers
+
+        raise InputError(f"--inflate scales the exports of --columns ({consumers()}); "
+                         "one --column has none")
     from ..noise.allan import allan_deviation
     from ..noise.allan_fit import fit_noise
     from ..noise.allan_report import write_allan

@@ -456,16 +456,58 @@ def ardupilot_params(e: NoiseExport, dt_s: float = ARDUPILOT_DT_S) -> str:
     return "\n".join(lines) + "\n"
 
 
+@dataclass(frozen=True)
+class ExportTarget:
+    """One file a filter or VIO system reads: who reads it, its name, its writer, its values.
+
+    ``key`` names the target's parameters in the JSON (two files of one consumer share it),
+    ``short`` names the consumer in the command line's help, ``consumer`` and ``use`` in the
+    report (``"PX4 EKF2"``, ``"for the console"``).
+    """
+
+    key: str
+    short: str
+    consumer: str
+    file: str
+    write: Callable[[NoiseExport], str]
+    parameters: Callable[[NoiseExport], list[Parameter]]
+    use: str = ""
+
+
+#: Every export, in the order the report names them: adding a target is one entry here.
+TARGETS: tuple[ExportTarget, ...] = (
+    ExportTarget("kalibr", "Kalibr", "Kalibr", "imu.yaml", kalibr_yaml, _kalibr_parameters),
+    ExportTarget("openvins", "OpenVINS", "OpenVINS", "kalibr_imu_chain.yaml", openvins_yaml,
+                 _kalibr_parameters),
+    ExportTarget("vins", "VINS", "VINS-Mono/Fusion", "vins_imu.yaml", vins_yaml,
+                 _vins_parameters),
+    ExportTarget("orbslam3", "ORB-SLAM3", "ORB-SLAM3", "orbslam3_imu.yaml", orbslam3_yaml,
+                 _orbslam3_parameters),
+    ExportTarget("px4_ekf2", "PX4", "PX4 EKF2", "px4_ekf2.params", px4_params, px4_parameters,
+                 "for QGroundControl"),
+    ExportTarget("px4_ekf2", "PX4", "PX4 EKF2", "px4_ekf2_console.txt", px4_console,
+                 px4_parameters, "for the console"),
+    ExportTarget("ardupilot_ek3", "ArduPilot", "ArduPilot EKF3", "ardupilot_ek3.parm",
+                 ardupilot_params, ardupilot_parameters),
+)
 #: Each export's file name and how it is written.
-FILES: dict[str, Callable[[NoiseExport], str]] = {
-    "imu.yaml": kalibr_yaml,
-    "kalibr_imu_chain.yaml": openvins_yaml,
-    "vins_imu.yaml": vins_yaml,
-    "orbslam3_imu.yaml": orbslam3_yaml,
-    "px4_ekf2.params": px4_params,
-    "px4_ekf2_console.txt": px4_console,
-    "ardupilot_ek3.parm": ardupilot_params,
-}
+FILES: dict[str, Callable[[NoiseExport], str]] = {t.file: t.write for t in TARGETS}
+
+
+def consumers() -> str:
+    """Return the consumers of the exports by their short names: ``"Kalibr, OpenVINS, ..."``."""
+    return ", ".join(dict.fromkeys(t.short for t in TARGETS))
+
+
+def export_listing(folder: str = "") -> str:
+    """Return the exports as the report lists them: each consumer, its files in ``folder``."""
+    by_consumer: dict[str, list[ExportTarget]] = {}
+    for t in TARGETS:
+        by_consumer.setdefault(t.consumer, []).append(t)
+    return ", ".join(
+        f"{consumer} ("
+        + ", ".join(f"`{folder}{t.file}`" + (f" {t.use}" if t.use else "") for t in targets)
+        + ")" for consumer, targets in by_consumer.items())
 
 
 def export_files(e: NoiseExport) -> dict[str, str]:
@@ -482,9 +524,7 @@ def _json_parameter(p: Parameter) -> dict[str, Any]:
 
 def exports_dict(e: NoiseExport) -> dict[str, Any]:
     """Return every export's parameters as JSON-ready values (with their units), and the factor."""
-    targets = {"kalibr": _kalibr_parameters(e), "openvins": _kalibr_parameters(e),
-               "orbslam3": _orbslam3_parameters(e), "vins": _vins_parameters(e),
-               "px4_ekf2": px4_parameters(e), "ardupilot_ek3": ardupilot_parameters(e)}
+    targets = {t.key: t.parameters(e) for t in TARGETS}
     return {"inflate": e.inflate, "rate_hz": e.rate,
             "px4_predict_s": PX4_PREDICT_S, "ardupilot_dt_s": ARDUPILOT_DT_S,
             "gravity_m_s2": e.gravity, "gravity_from": e.gravity_from,

@@ -38,6 +38,7 @@ from ..loop.handoff import Handoff, hand_off
 from ..loop.loop_report import CONSOLE_WIDTH, write_loop_report
 from ..noise.allan_fit import NoiseFit
 from ..noise.axes import Axis
+from ..noise.exports import export_listing
 from ..noise.imu_noise import ImuNoise, write_imu_noise
 from ..noise.metrics import metric_definitions, segment_text
 from ..study.harness import StudyResult
@@ -247,10 +248,7 @@ def _page(result: ImuResult, title: str, tables: dict[str, tuple[pd.DataFrame, s
     sections = [
         ("Noise parameters (Allan variance)", "noise",
          "IEEE Std 952 terms fitted to each axis's overlapping Allan deviation; exports for "
-         "Kalibr (`noise/imu.yaml`), OpenVINS (`noise/kalibr_imu_chain.yaml`), "
-         "VINS-Mono/Fusion (`noise/vins_imu.yaml`), ORB-SLAM3 (`noise/orbslam3_imu.yaml`), "
-         "PX4 EKF2 (`noise/px4_ekf2.params` for QGroundControl, `noise/px4_ekf2_console.txt` "
-         "for the console), ArduPilot EKF3 (`noise/ardupilot_ek3.parm`), "
+         + export_listing("noise/") + ", "
          "MATLAB (`noise/imu_params.m`) and JSON (`noise/imu_noise.json`)"
          + (f", inflated {result.config.inflate:g}x for a moving platform" if
             result.config.inflate != 1.0 else "")
