@@ -5,7 +5,7 @@ should find, and which of them are slow (judged on the outage error rather than 
 from __future__ import annotations
 
 from fosmodel.core.candidates import OUTPUT, Term
-from fosmodel.loop.effects import Effect
+from fosmodel.loop.effects import Effect, make_effect
 
 #: Source kinds whose effect is slow: a one-step predictor barely sees them.
 SLOW_KINDS = ("temperature_bias", "drift", "bias_step", "random_walk")
@@ -29,18 +29,18 @@ def true_effects(truth: dict) -> list[tuple[Effect, bool]]:
         if kind in ("temperature_bias", "aux_input"):
             lags = [lag for t in s["terms"] or [] for ch, lag in Term.parse(t["term"]).factors
                     if ch == p["input"]]
-            effect = Effect("aux", channel=p["input"], max_lag=max(lags, default=0) + ar_order)
+            effect = make_effect("aux", channel=p["input"], max_lag=max(lags, default=0) + ar_order)
         elif kind == "vibration":
-            effect = Effect("periodic", freq_hz=p["freq_hz"])
+            effect = make_effect("periodic", freq_hz=p["freq_hz"])
         elif kind == "nonlinear_ar":
-            effect = Effect("nonlinear")
+            effect = make_effect("nonlinear")
         elif kind == "drift":
-            effect = Effect("drift", form="linear+exponential", tau_s=p["warmup_tau_s"])
+            effect = make_effect("drift", form="linear+exponential", tau_s=p["warmup_tau_s"])
         elif kind == "bias_step":  # one effect per step
-            out += [(Effect("step", time_s=step["time_s"]), True) for step in p["steps"][:-1]]
-            effect = Effect("step", time_s=p["steps"][-1]["time_s"])
+            out += [(make_effect("step", time_s=step["time_s"]), True) for step in p["steps"][:-1]]
+            effect = make_effect("step", time_s=p["steps"][-1]["time_s"])
         elif kind == "random_walk" and s["channel"] == truth["target"]:
-            effect = Effect("level")  # a wandering bias: its optimal predictor is a level
+            effect = make_effect("level")  # a wandering bias: its optimal predictor is a level
         else:
             continue
         out.append((effect, kind in SLOW_KINDS))
